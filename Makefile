@@ -1,0 +1,37 @@
+# WorkCal: `make demo` and `make test` set up everything they need on Debian 12 (as root), then run.
+
+PYTHON        := /usr/bin/python3
+BUILD         := $(CURDIR)/build
+FREECAD_HOME  := $(BUILD)/freecad-home
+DEMO_DIR      := $(BUILD)/demo
+DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
+                 xvfb xauth libgl1-mesa-dri
+# Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
+FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1
+XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
+PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR)
+
+.PHONY: setup demo test test-headless test-gui bench clean
+
+setup:
+	@.ci/install-debian-packages $(DEB_PACKAGES)
+	@mkdir -p $(FREECAD_HOME)/Mod
+	@ln -sfn $(CURDIR) $(FREECAD_HOME)/Mod/WorkCal
+
+demo: setup
+	$(PYTHON) -m workcal_wb demo --out $(DEMO_DIR)
+
+test: test-headless test-gui
+
+test-headless: setup
+	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
+	sys.exit(pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()))"
+
+test-gui: setup
+	$(FREECAD_ENV) $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py
+
+bench: setup
+	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,30 @@
+"""Shared test set-up: the checkout first on sys.path, an output folder per test, the shared data."""
+import os
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+# Real scanner data lives beside the checkout (../shared); tests that use it skip cleanly without it.
+SHARED = Path(os.environ.get("WORKCAL_SHARED", ROOT.parent / "shared"))
+BUNNY = SHARED / "data" / "stanford-bunny"
+OUTPUT = Path(os.environ.get("WORKCAL_TEST_OUTPUT", ROOT / "build" / "test-output"))
+
+
+@pytest.fixture
+def output_dir(request) -> Path:
+    """A folder for this test's artefacts (screenshots, reports) that survives the run."""
+    folder = OUTPUT / re.sub(r"[^\w.-]+", "_", request.node.nodeid)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+@pytest.fixture
+def bunny() -> Path:
+    if not (BUNNY / "bun_zipper.ply").exists():
+        pytest.skip(f"Stanford bunny data not found at {BUNNY}")
+    return BUNNY

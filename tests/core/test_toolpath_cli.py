@@ -1,0 +1,118 @@
+"""``python3 -m workcal_wb toolpath``: exit codes, messages, options (run in-process)."""
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from workcal_wb.cli import main
+from workcal_wb.core import frames
+from workcal_wb.core.result import CalibrationResult
+
+W = frames.from_euler_zyz(15.0, 5.0, -40.0, (700.0, 200.0, 300.0))
+GCODE = "(demo)\nG21 G90\nG0 X0 Y0 Z10\nG1 Z0 F500\nG2 X20 Y0 I10 J0\nG0 Z10\n"
+
+
+@pytest.fixture
+def files(tmp_path):
+    (tmp_path / "part.nc").write_text(GCODE)
+    for status in ("ok", "failed"):
+        gates = [{"name": "rms_mm", "value": 0.1 if status == "ok" else 0.9, "limit": 0.3,
+                  "passed": status == "ok", "unit": "mm"}]
+        CalibrationResult(status, W, quality_gates=gates).to_json(tmp_path / f"{status}.json")
+    return tmp_path
+
+
+def run(files, *args):
+    return main(["toolpath", "--in", str(files / "part.nc"), *args])
+
+
+def csv_points(path):
+    rows = csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
+    return np.array([[float(r["x_mm"]), float(r["y_mm"]), float(r["z_mm"])] for r in rows])
+
+
+def test_ok_export_exit_0(files, capsys):
+    out = files / "prog.src"
+    assert run(files, "--calibration", str(files / "ok.json"), "--format", "krl", "--out", str(out)) == 0
+    assert out.exists() and "LIN {" in out.read_text()
+    assert capsys.readouterr().out.startswith(f"wrote {out}: KUKA KRL, 4 moves")
+
+
+def test_format_from_extension(files):
+    for ext in (".mod", ".script", ".ls", ".csv", ".nc"):
+        assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / f"prog{ext}")) == 0
+
+
+def test_failed_calibration_exit_1_says_which_gate_and_how_to_force(files, capsys):
+    out = files / "prog.script"
+    assert run(files, "--calibration", str(files / "failed.json"), "--out", str(out)) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("workcal toolpath: refused: ") and err.count("\n") == 1
+    assert "gate rms_mm = 0.9 mm, limit 0.3" in err and "--force" in err
+    assert not out.exists()
+
+
+def test_forced_export_exit_0_with_warning_and_banner(files, capsys):
+    out = files / "prog.script"
+    assert run(files, "--calibration", str(files / "failed.json"), "--out", str(out), "--force") == 0
+    assert "FORCED" in capsys.readouterr().err
+    assert out.read_text().startswith("# FORCED EXPORT")
+
+
+def test_envelope_violation_exit_1(files, capsys):
+    out = files / "prog.csv"
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out),
+               "--envelope", "0,0,0,100,100,100") == 1
+    assert "outside the work envelope" in capsys.readouterr().err and not out.exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--in", "missing.nc"], "cannot read G-code"),
+    (["--envelope", "1,2,3"], "work envelope"),
+    (["--table-angle", "30"], "--table-angle needs --table-frame"),
+    (["--out", "prog.xyz"], "cannot tell the output format"),
+    (["--calibration", "nope.json"], "cannot read calibration"),
+    (["--in", "part.FCStd"], "FreeCAD documents"),
+])
+def test_bad_input_exit_2(files, capsys, monkeypatch, args, message):
+    monkeypatch.chdir(files)
+    options = {"--in": "part.nc", "--calibration": "ok.json", "--out": "prog.csv", **dict(zip(args[::2], args[1::2]))}
+    assert main(["toolpath"] + [word for option in options.items() for word in option]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("workcal toolpath: error: ") and message in err
+
+
+def test_bad_gcode_line_exit_2(files, capsys):
+    (files / "part.nc").write_text("G0 X0 Y0 Z0\nG2 X10 Y0 I3 J0 F100\n")
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.csv")) == 2
+    assert "part.nc: line 2: arc radius mismatch" in capsys.readouterr().err
+
+
+def test_units_in_inches(files):
+    (files / "part.nc").write_text("G0 X1 Y0 Z0\nG1 X2 F10\n")
+    out = files / "p.csv"
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out), "--units-in", "in") == 0
+    np.testing.assert_allclose(csv_points(out), frames.apply(W, np.array([[25.4, 0, 0], [50.8, 0, 0]])), atol=1e-3)
+
+
+def test_rotary_table_frame_and_angle(files):
+    BQ = frames.from_euler_zyz(0, 1, 0, (900.0, 100.0, 0.0))
+    (files / "table.json").write_text(json.dumps({"matrix": BQ.tolist()}))
+    out0, out90 = files / "p0.csv", files / "p90.csv"
+    common = ["--calibration", str(files / "ok.json"), "--table-frame", str(files / "table.json")]
+    assert run(files, *common, "--out", str(out0)) == 0
+    assert run(files, *common, "--table-angle", "90", "--out", str(out90)) == 0
+    chain = BQ @ frames.rigid(frames.rot_z(90.0)) @ frames.invert(BQ) @ W
+    np.testing.assert_allclose(csv_points(out90), frames.apply(chain, frames.apply(frames.invert(W), csv_points(out0))),
+                               atol=2e-3)
+    assert "rotary table at 90.0000 deg" in out90.read_text()
+
+
+def test_krl_mode_and_chord_tolerance(files):
+    coarse, fine = files / "coarse.src", files / "fine.src"
+    common = ["--calibration", str(files / "ok.json"), "--krl-mode", "transformed"]
+    assert run(files, *common, "--out", str(coarse), "--chord-tol", "0.5") == 0
+    assert run(files, *common, "--out", str(fine), "--chord-tol", "0.001") == 0
+    assert "$BASE = $NULLFRAME" in fine.read_text()
+    assert fine.read_text().count("LIN {") > 3 * coarse.read_text().count("LIN {")

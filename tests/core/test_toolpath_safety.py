@@ -1,0 +1,130 @@
+"""Refusals: failed calibrations, NaN, the work envelope; atomic writing; the FORCED banner."""
+import math
+import os
+
+import numpy as np
+import pytest
+
+from workcal_wb.core import frames
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.toolpath import Envelope, ExportRefused, FORMATS, Move, Toolpath, export, parse_gcode
+from workcal_wb.core.toolpath.safety import number
+
+W = frames.rigid(frames.rot_z(90.0), (1000.0, 0.0, 500.0))
+SOURCE = "G0 X10 Y0 Z20\nG1 Z0 F300\nG3 X-10 Y0 I-10 J0 F600 (half circle through X0 Y10)\nG0 Z20\n"
+
+
+def calibration(status="ok", matrix=W):
+    gates = [{"name": "rms_mm", "value": 0.8, "limit": 0.3, "passed": status == "ok", "unit": "mm"},
+             {"name": "coverage", "value": 0.9, "limit": 0.5, "passed": True, "unit": ""}]
+    return CalibrationResult(status, matrix, quality_gates=gates, reasons=[] if status == "ok" else ["RMS too high"])
+
+
+@pytest.fixture
+def path():
+    return parse_gcode(SOURCE, "part.nc")
+
+
+def files(folder):
+    return sorted(os.listdir(folder))
+
+
+@pytest.mark.parametrize("status", ["failed", "ambiguous"])
+def test_a_calibration_that_is_not_ok_is_refused(status, path, tmp_path):
+    with pytest.raises(ExportRefused) as err:
+        export(path, calibration(status), "krl", tmp_path / "prog.src", calibration_source="cal.json")
+    message = str(err.value)
+    assert message.startswith(f"cal.json: calibration status is '{status}'")
+    assert "gate rms_mm = 0.8 mm, limit 0.3" in message and "coverage" not in message
+    assert "--force" in message
+    assert files(tmp_path) == []
+
+
+def test_a_calibration_without_w_cannot_be_forced(path, tmp_path):
+    with pytest.raises(InputError, match="no transform W"):
+        export(path, CalibrationResult("failed", None), "csv", tmp_path / "p.csv", force=True)
+
+
+@pytest.mark.parametrize("fmt", sorted(FORMATS))
+def test_a_forced_export_says_so_before_any_motion(fmt, path, tmp_path):
+    out = tmp_path / f"prog{FORMATS[fmt].EXTENSION}"
+    job = export(path, calibration("failed"), fmt, out, force=True)
+    assert job.forced
+    lines = out.read_text().splitlines()
+    first_banner = next(i for i, line in enumerate(lines) if "FORCED EXPORT" in line)
+    assert first_banner <= {"rapid": 1, "fanuc": 12}.get(fmt, 0)  # RAPID: after MODULE; Fanuc: first /MN line
+    assert "gate rms_mm = 0.8 mm, limit 0.3" in lines[first_banner + 1]
+    assert "Do not run" in lines[first_banner + 2]
+    if fmt == "fanuc":
+        assert 'COMMENT\t\t= "FORCED";' in lines
+
+
+def test_an_ok_export_has_no_banner(path, tmp_path):
+    out = tmp_path / "prog.src"
+    assert not export(path, calibration(), "krl", out).forced
+    assert "FORCED" not in out.read_text()
+
+
+def test_envelope_refusal_names_the_move_and_writes_nothing(path, tmp_path):
+    out = tmp_path / "prog.src"
+    out.write_text("older program\n")
+    # In B the part sits at x 990..1010, y -10..10, z 500..520: cut the top off.
+    envelope = Envelope.parse("900,-100,400,1100,100,510")
+    with pytest.raises(ExportRefused) as err:
+        export(path, calibration(), "krl", out, envelope=envelope)
+    assert str(err.value) == (
+        "part.nc: move 1 (line 1) reaches (1000.000, 10.000, 520.000) mm in the robot base frame, "
+        "outside the work envelope x [900, 1100], y [-100, 100], z [400, 510]; nothing was written")
+    assert out.read_text() == "older program\n"
+    assert files(tmp_path) == ["prog.src"]  # no temporary file left behind
+
+
+def test_envelope_is_checked_along_arcs_not_only_at_their_ends(path, tmp_path):
+    # The half circle's ends are at x 1000 in B but it bulges to x 990 (Y10 in X -> -X in B).
+    envelope = Envelope.parse("995,-100,400,1100,100,600")
+    with pytest.raises(ExportRefused, match=r"move 3 \(line 3\) reaches \(99[0-4]\.\d+, "):
+        export(path, calibration(), "csv", tmp_path / "p.csv", envelope=envelope)
+    assert files(tmp_path) == []
+    export(path, calibration(), "csv", tmp_path / "p.csv", envelope=Envelope.parse("989,-100,400,1100,100,600"))
+
+
+@pytest.mark.parametrize("field, message", [("end", "non-finite position"), ("feed", "non-finite feed")])
+def test_nan_is_refused(field, message, tmp_path):
+    moves = [Move("rapid", [0, 0, 10]), Move("linear", [0, 0, 0], feed=100.0, line=7)]
+    setattr(moves[1], field, np.array([0, math.nan, 0]) if field == "end" else math.nan)
+    with pytest.raises(ExportRefused, match=f"move 2 \\(line 7\\) has a {message}"):
+        export(Toolpath(moves, source="bad"), calibration(), "urscript", tmp_path / "p.script")
+    assert files(tmp_path) == []
+
+
+def test_number_refuses_non_finite_values_and_negative_zero():
+    for bad in (math.nan, math.inf, -math.inf):
+        with pytest.raises(ExportRefused):
+            number(bad, 3)
+    assert number(-0.00001, 3) == "0.000" and number(-1.5, 1) == "-1.5"
+
+
+@pytest.mark.parametrize("text", ["1,2,3", "a,b,c,d,e,f", "0,0,0,0,1,1", "0,0,0,1,1,nan"])
+def test_bad_envelopes_are_input_errors(text):
+    with pytest.raises(InputError, match="work envelope"):
+        Envelope.parse(text)
+
+
+def test_empty_toolpath_and_bad_tolerance_are_input_errors(path, tmp_path):
+    with pytest.raises(InputError, match="no moves"):
+        export(Toolpath(source="empty.nc"), calibration(), "csv", tmp_path / "p.csv")
+    with pytest.raises(InputError, match="chordal tolerance"):
+        export(path, calibration(), "csv", tmp_path / "p.csv", chord_tol_mm=0.0)
+    with pytest.raises(InputError, match="unknown output format"):
+        export(path, calibration(), "step", tmp_path / "p.csv")
+
+
+def test_non_finite_quality_numbers_are_written_as_n_a(path, tmp_path):
+    gates = [{"name": "rms_mm", "value": math.nan, "limit": 0.3, "passed": True, "unit": "mm"}]
+    uncertainty = {"toolpath_displacement_mm": {"p95": math.nan}}
+    result = CalibrationResult("ok", W, quality_gates=gates, uncertainty=uncertainty)
+    out = tmp_path / "p.csv"
+    export(path, result, "csv", out)
+    text = out.read_text().lower()
+    assert "gate rms_mm = n/a mm, limit 0.3: passed" in text and "p95 n/a mm" in text and "nan" not in text

@@ -1,0 +1,123 @@
+"""FreeCAD layer under freecadcmd: read a Path Job, transform it, make a Path object and a Robot trajectory."""
+import numpy as np
+import pytest
+
+FreeCAD = pytest.importorskip("FreeCAD")
+
+from workcal_wb.core import frames  # noqa: E402
+from workcal_wb.core.errors import InputError  # noqa: E402
+from workcal_wb.core.result import CalibrationResult  # noqa: E402
+from workcal_wb.core.toolpath import ExportRefused, linearised, transformed  # noqa: E402
+from workcal_wb.fc import toolpath as fctp  # noqa: E402
+
+TURNED = frames.rigid(frames.rot_z(30.0), (600.0, -50.0, 120.0))  # keeps the XY arcs of a Profile
+TILTED = frames.from_euler_zyz(40.0, 20.0, -10.0, (800.0, 100.0, 50.0))
+
+
+def job_modules():
+    """PathJob and PathProfile in FreeCAD 1.x (CAM) or 0.20 (Path)."""
+    try:
+        import Path.Main.Job as PathJob
+        import Path.Op.Profile as PathProfile
+    except ImportError:
+        from PathScripts import PathJob, PathProfile
+    return PathJob, PathProfile
+
+
+def calibration(W, status="ok"):
+    return CalibrationResult(status, W, quality_gates=[{"name": "rms_mm", "value": 0.1, "limit": 0.3,
+                                                        "passed": status == "ok", "unit": "mm"}])
+
+
+@pytest.fixture(scope="module")
+def job():
+    doc = FreeCAD.newDocument("WorkCalToolpathTest")
+    box = doc.addObject("Part::Box", "Box")
+    box.Length, box.Width, box.Height = 50, 30, 10
+    doc.recompute()
+    PathJob, PathProfile = job_modules()
+    job = PathJob.Create("Job", [box], None)
+    controller = job.Tools.Group[0]
+    controller.HorizFeed, controller.VertFeed = "600 mm/min", "300 mm/min"
+    PathProfile.Create("Profile")
+    doc.recompute()
+    yield job
+    FreeCAD.closeDocument(doc.Name)
+
+
+def placement_matrix(placement):
+    return np.array(placement.toMatrix().A).reshape(4, 4)
+
+
+def test_read_job_follows_its_commands_with_feeds_in_mm_per_min(job):
+    tp = fctp.read_toolpath(job)
+    commands = [c for op in job.Operations.Group for c in op.Path.Commands if c.Name in ("G0", "G1", "G2", "G3")]
+    assert len(tp) == len(commands) > 10
+    for move, command in zip(tp.moves, commands):
+        for axis, value in zip("XYZ", move.end):
+            if axis in command.Parameters:
+                assert value == pytest.approx(command.Parameters[axis], abs=1e-6)
+    assert {m.feed for m in tp.moves if m.kind == "linear"} >= {300.0, 600.0}
+    assert any(m.is_arc for m in tp.moves)
+    assert tp.header[0] == "Profile"
+
+
+def test_path_object_round_trip_keeps_arcs(job):
+    doc = job.Document
+    tp = fctp.read_toolpath(job)
+    obj = fctp.make_path_object(doc, tp, calibration(TURNED), name="Turned")
+    again = fctp.read_toolpath(obj)
+    expected = transformed(tp, TURNED)
+    assert [m.kind for m in again.moves] == [m.kind for m in expected.moves]
+    for m, n in zip(again.moves, expected.moves):
+        np.testing.assert_allclose(m.end, n.end, atol=1e-6)
+        assert m.feed == pytest.approx(n.feed) if n.feed else m.feed is None
+        if n.is_arc:
+            np.testing.assert_allclose(m.centre, n.centre, atol=1e-6)
+    doc.removeObject(obj.Name)
+
+
+def test_path_object_of_a_tilted_w_matches_numpy_point_by_point(job):
+    doc = job.Document
+    tp = fctp.read_toolpath(job)
+    obj = fctp.make_path_object(doc, tp, calibration(TILTED), name="Tilted")
+    assert {c.Name for c in obj.Path.Commands if not c.Name.startswith("(")} <= {"G0", "G1"}
+    again = fctp.read_toolpath(obj)
+    np.testing.assert_allclose(again.points(), frames.apply(TILTED, linearised(tp).points()), atol=1e-6)
+    doc.removeObject(obj.Name)
+
+
+def test_failed_calibration_makes_no_object_unless_forced(job):
+    doc = job.Document
+    tp = fctp.read_toolpath(job)
+    before = len(doc.Objects)
+    with pytest.raises(ExportRefused, match="status is 'failed'"):
+        fctp.make_path_object(doc, tp, calibration(TURNED, "failed"))
+    assert len(doc.Objects) == before
+    obj = fctp.make_path_object(doc, tp, calibration(TURNED, "failed"), force=True, name="Forced")
+    assert obj.Label == "Forced (FORCED)" and obj.Path.Commands[0].Name.startswith("(FORCED EXPORT")
+    doc.removeObject(obj.Name)
+
+
+def test_not_a_path_is_an_input_error(job):
+    model = job.Model.Group[0]
+    with pytest.raises(InputError, match="neither a Path/CAM Job"):
+        fctp.read_toolpath(model)
+
+
+@pytest.mark.skipif(not fctp.robot_available(), reason="FreeCAD's Robot workbench is not available")
+def test_robot_trajectory_waypoints(job):
+    doc = job.Document
+    tp = fctp.read_toolpath(job)
+    obj = fctp.make_robot_trajectory(doc, tp, calibration(TILTED), rapid_feed_mm_min=3000.0)
+    waypoints = obj.Trajectory.Waypoints
+    moves = linearised(tp).moves
+    assert len(waypoints) == len(moves)
+    expected_points = frames.apply(TILTED, np.array([m.end for m in moves]))
+    for wp, move, p in zip(waypoints, moves, expected_points):
+        pose = placement_matrix(wp.Pos)
+        np.testing.assert_allclose(pose[:3, 3], p, atol=1e-6)
+        np.testing.assert_allclose(pose[:3, 2], -TILTED[:3, 2], atol=1e-9)  # tool Z along the approach
+        assert wp.Type == "LIN"
+        assert wp.Velocity == pytest.approx((move.feed or 3000.0) / 60.0)
+    doc.removeObject(obj.Name)

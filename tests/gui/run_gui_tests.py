@@ -1,0 +1,22 @@
+"""Run the GUI tests inside a real FreeCAD window: `xvfb-run freecad tests/gui/run_gui_tests.py`.
+
+FreeCAD executes this file once its main window is up (as module "run_gui_tests", not "__main__").
+pytest runs from a timer so the event loop and the 3D view exist; its status becomes FreeCAD's.
+"""
+import os
+import sys
+
+from PySide import QtCore
+
+TESTS = os.path.dirname(os.path.abspath(__file__))
+
+
+def _run():
+    import pytest
+
+    rc = pytest.main(["-q", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), TESTS])
+    sys.stdout.flush()
+    os._exit(int(rc))  # FreeCAD ignores QApplication.exit codes; leave with pytest's status
+
+
+QtCore.QTimer.singleShot(0, _run)

@@ -1,0 +1,80 @@
+"""``workcal toolpath``: a G-code toolpath in workpiece coordinates, out as a calibrated robot or CNC program."""
+from __future__ import annotations
+
+import json
+import sys
+
+from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, Envelope, ExportRefused, RotaryTable, export,
+                                      format_for, read_gcode)
+from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN
+from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "toolpath", help="transform a G-code toolpath by the calibration and write a robot/CNC program",
+        description="Read a toolpath in workpiece coordinates (G-code), move it into the robot base frame with "
+                    "W from a calibration result, and write KRL, RAPID, URScript, Fanuc LS, G-code or CSV. "
+                    "Nothing is written when the calibration failed its gates (unless --force), when a number "
+                    "is not finite, or when a point leaves the --envelope.")
+    p.add_argument("--in", dest="input", required=True, metavar="FILE", help="G-code file (.nc, .ngc, .gcode, ...)")
+    p.add_argument("--calibration", required=True, metavar="FILE", help="calibration result JSON (W = ^B X)")
+    p.add_argument("--format", choices=list(FORMATS), help="output format (default: from the --out extension)")
+    p.add_argument("--out", required=True, metavar="FILE", help="program to write (replaced atomically)")
+    p.add_argument("--force", action="store_true",
+                   help="export even when the calibration failed its quality gates (the file then says FORCED)")
+    p.add_argument("--envelope", metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+                   help="work envelope in the robot base frame, mm: refuse any point outside it")
+    p.add_argument("--table-frame", metavar="FILE", help="JSON 4x4 ^B Q of the rotary table (or {\"matrix\": ...})")
+    p.add_argument("--table-angle", type=float, metavar="DEG",
+                   help="rotary table angle to export at (needs --table-frame)")
+    p.add_argument("--chord-tol", type=float, default=DEFAULT_CHORD_TOL_MM, metavar="MM",
+                   help=f"chordal tolerance for arcs turned into lines (default {DEFAULT_CHORD_TOL_MM} mm)")
+    p.add_argument("--units-in", choices=["mm", "in"], default="mm",
+                   help="units of the G-code until it says G20/G21 (default mm)")
+    p.add_argument("--krl-mode", choices=KRL_MODES, default="base",
+                   help="KRL: 'base' sets $BASE = W and keeps workpiece coordinates; 'transformed' writes points in B")
+    p.add_argument("--rapid-feed", type=float, default=DEFAULT_RAPID_FEED_MM_MIN, metavar="MM_PER_MIN",
+                   help=f"robot speed for G0 moves (default {DEFAULT_RAPID_FEED_MM_MIN:g} mm/min)")
+    return p
+
+
+def _table(args) -> RotaryTable | None:
+    if args.table_frame is None:
+        if args.table_angle is not None:
+            raise InputError("--table-angle needs --table-frame (the table's frame ^B Q)")
+        return None
+    try:
+        with open(args.table_frame, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except OSError as exc:
+        raise InputError(f"{args.table_frame}: cannot read table frame ({exc.strerror})") from exc
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{args.table_frame}: not valid JSON ({exc})") from exc
+    matrix = data.get("matrix") if isinstance(data, dict) else data
+    return RotaryTable(matrix, args.table_angle or 0.0, source=args.table_frame)
+
+
+def run(args) -> int:
+    if args.input.lower().endswith(".fcstd"):
+        raise InputError(f"{args.input}: FreeCAD documents are read inside FreeCAD (WorkCal workbench); "
+                         "export the Job's G-code, or pass a G-code file here")
+    toolpath = read_gcode(args.input, units=args.units_in)
+    calibration = CalibrationResult.from_json(args.calibration)
+    fmt = args.format or format_for(args.out)
+    try:
+        job = export(toolpath, calibration, fmt, args.out, force=args.force, table=_table(args),
+                     envelope=Envelope.parse(args.envelope) if args.envelope else None,
+                     chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
+                     calibration_source=args.calibration)
+    except ExportRefused as exc:
+        print(f"workcal toolpath: refused: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    if job.forced:
+        print(f"workcal toolpath: warning: FORCED export of a {calibration.status!r} calibration", file=sys.stderr)
+    print(f"wrote {args.out}: {FORMATS[fmt].NAME}, {len(toolpath)} moves from {args.input}, "
+          f"calibration {calibration.status}")
+    return EXIT_OK

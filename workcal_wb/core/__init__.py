@@ -1,0 +1,1 @@
+"""FreeCAD-free core: frames, readers, matching, calibration, toolpaths, simulation, studies, reports."""

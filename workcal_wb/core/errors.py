@@ -1,0 +1,28 @@
+"""The errors WorkCal raises on purpose: each message names the file or object and what is wrong.
+
+Callers (CLI, FreeCAD commands) show ``str(error)`` to the user as is; anything else escaping is a bug.
+"""
+
+
+class WorkCalError(Exception):
+    """A problem the user can act on (bad input, impossible request)."""
+
+
+class InputError(WorkCalError):
+    """A file, object or parameter that cannot be used as given."""
+
+
+class MissingDependency(WorkCalError):
+    """A Python package WorkCal needs is not installed; the message says what to install."""
+
+
+def require_open3d():
+    """Import open3d or explain how to get it (Debian ships it as python3-open3d)."""
+    try:
+        import open3d
+    except ImportError as exc:
+        raise MissingDependency(
+            "open3d is not installed for this Python; on Debian/Ubuntu run: "
+            "sudo apt-get install python3-open3d  (elsewhere: pip install open3d)"
+        ) from exc
+    return open3d

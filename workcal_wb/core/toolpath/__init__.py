@@ -1,0 +1,14 @@
+"""Toolpaths in, calibrated robot and CNC programs out (FreeCAD-free).
+
+Read a path in the workpiece frame X (``read_gcode``, or ``workcal_wb.fc.toolpath`` for FreeCAD Path/CAM
+jobs), then ``export`` it through W = ^B X to KRL, RAPID, URScript, Fanuc LS, G-code or CSV.
+"""
+from .exporters import FORMATS, export, format_for
+from .gcode import format_gcode, parse_gcode, read_gcode
+from .model import ARC_CCW, ARC_CW, LINEAR, RAPID, Move, RotaryTable, Toolpath
+from .safety import Envelope, ExportRefused, checked_placement
+from .transform import DEFAULT_CHORD_TOL_MM, linearised, placement, transformed
+
+__all__ = ["FORMATS", "export", "format_for", "format_gcode", "parse_gcode", "read_gcode", "ARC_CCW", "ARC_CW",
+           "LINEAR", "RAPID", "Move", "RotaryTable", "Toolpath", "Envelope", "ExportRefused", "checked_placement",
+           "DEFAULT_CHORD_TOL_MM", "linearised", "placement", "transformed"]

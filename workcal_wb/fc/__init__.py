@@ -1,0 +1,1 @@
+"""The FreeCAD layer: document objects and conversions between FreeCAD and the core's numpy types."""

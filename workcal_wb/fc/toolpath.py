@@ -1,0 +1,114 @@
+"""FreeCAD Path/CAM toolpaths in, calibrated Path objects and Robot trajectories out.
+
+Reading is duck-typed on what FreeCAD 0.20 (``Path``, ``PathScripts``) and 1.x (``CAM``, ``Path.Main``)
+share: a Job has ``Operations.Group``; an operation or ``Path::Feature`` has ``.Path.Commands``.  So no
+version switch is needed here; only creating Jobs (tests, GUI) has to pick ``PathScripts.PathJob`` or
+``Path.Main.Job``.  FreeCAD stores feeds in mm/s: they are converted to the core's mm/min both ways.
+"""
+from __future__ import annotations
+
+import FreeCAD
+import Path
+
+from workcal_wb.core.errors import InputError, MissingDependency
+from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.toolpath import DEFAULT_CHORD_TOL_MM, Envelope, RotaryTable, Toolpath, parse_gcode, transformed
+from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, robot_poses
+from workcal_wb.core.toolpath.gcode import blocks
+from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
+
+SECONDS_PER_MINUTE = 60.0
+
+
+def is_job(obj) -> bool:
+    return hasattr(obj, "Operations") and hasattr(obj.Operations, "Group")
+
+
+def _paths(obj) -> list:
+    """The objects whose ``Path`` make up ``obj``: a Job's active operations in order, or obj itself."""
+    if is_job(obj):
+        ops = [op for op in obj.Operations.Group if hasattr(op, "Path") and getattr(op, "Active", True)]
+        if not ops:
+            raise InputError(f"Job {obj.Label!r}: no active operation with a path")
+        return ops
+    if hasattr(obj, "Path") and hasattr(obj.Path, "Commands"):
+        return [obj]
+    raise InputError(f"{obj.Label!r} is neither a Path/CAM Job nor an operation or Path object")
+
+
+def _gcode_line(command) -> str:
+    """One command as G-code in mm and mm/min (fixed-point: the reader takes no exponents).
+
+    A/B words are read as WorkCal's own tool-axis angles (what ``make_path_object`` writes); C is refused."""
+    if command.Name.startswith("("):
+        return command.Name
+    words = [f"{k}{v * SECONDS_PER_MINUTE if k == 'F' else v:.9f}" for k, v in command.Parameters.items()]
+    return " ".join([command.Name] + words)
+
+
+def read_toolpath(obj) -> Toolpath:
+    """The toolpath of a Job (all active operations, modal state carried across) or of one Path object.
+
+    Positions are in the Job's frame, i.e. the workpiece frame X; "line N" in errors is command N."""
+    source = f"{obj.TypeId} {obj.Label!r}"
+    lines = []
+    for op in _paths(obj):
+        lines += [_gcode_line(c) for c in op.Path.Commands]
+    return parse_gcode("\n".join(lines), source=source)
+
+
+def _matrix(T) -> "FreeCAD.Matrix":
+    return FreeCAD.Matrix(*[float(v) for v in T.reshape(-1)])
+
+
+def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
+                     envelope: Envelope | None = None, table: RotaryTable | None = None,
+                     chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, name: str = "WorkCalPath"):
+    """A ``Path::Feature`` holding ``toolpath`` moved into B, after the same checks as a file export."""
+    T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
+                                  chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
+    moved = transformed(toolpath, T, chord_tol_mm)
+    header = (forced_banner(calibration) if forced else []) + moved.header
+    commands = [Path.Command(f"({c})") for c in header]
+    for block in blocks(moved):
+        params = {k: v / SECONDS_PER_MINUTE if k == "F" else v for k, v in block.words.items()}
+        commands += [Path.Command(f"({c})") for c in block.comments] + [Path.Command(block.code, params)]
+    commands += [Path.Command(f"({c})") for c in moved.footer]
+    obj = doc.addObject("Path::Feature", name)
+    obj.Path = Path.Path(commands)
+    if forced:
+        obj.Label = f"{name} (FORCED)"
+    return obj
+
+
+def robot_available() -> bool:
+    try:
+        import Robot  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def make_robot_trajectory(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
+                          envelope: Envelope | None = None, table: RotaryTable | None = None,
+                          chord_tol_mm: float = DEFAULT_CHORD_TOL_MM,
+                          rapid_feed_mm_min: float = DEFAULT_RAPID_FEED_MM_MIN, name: str = "WorkCalTrajectory"):
+    """A Robot ``TrajectoryObject`` of LIN waypoints in B (velocities in mm/s), tool orientation as the exporters.
+
+    Waypoints are not continuous: FreeCAD blends continuous ones with a fixed 3 mm radius, which KDL
+    rejects on chords shorter than that (and FreeCAD 0.20 aborts on the error)."""
+    try:
+        import Robot
+    except ImportError as exc:
+        raise MissingDependency("FreeCAD's Robot workbench is not available in this FreeCAD; "
+                                "export KRL or CSV instead") from exc
+    T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
+                                  chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
+    waypoints = [Robot.Waypoint(FreeCAD.Placement(_matrix(pose.matrix)), type="LIN", name=f"P{i}",
+                                vel=pose.feed_mm_min / SECONDS_PER_MINUTE, cont=False)
+                 for i, pose in enumerate(robot_poses(toolpath, T, chord_tol_mm, rapid_feed_mm_min), start=1)]
+    obj = doc.addObject("Robot::TrajectoryObject", name)
+    obj.Trajectory = Robot.Trajectory(waypoints)
+    if forced:
+        obj.Label = f"{name} (FORCED)"
+    return obj
