@@ -5,11 +5,14 @@ from pathlib import Path
 
 from workcal_wb.cli import EXIT_OK
 from workcal_wb.core import frames
+from workcal_wb.core.atomic import atomic_write_text
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.simulate.scanner import scanner_ring
 from workcal_wb.core.simulate.scene import build_scene
+from workcal_wb.core.simulate.toolpath_sample import sample_toolpath
 from workcal_wb.core.simulate.truth import scene_truth, write_truth
+from workcal_wb.core.toolpath import format_gcode
 from workcal_wb.core.writers import write_ply
 
 
@@ -18,7 +21,7 @@ def add_parser(subparsers):
         "simulate", help="simulate a scene (platform, L-block, workpiece) and scan it, with the true U, V, W",
         description="Build the paper's scene in the robot base frame B, scan it with a virtual structured-light "
                     "scanner from one or more positions, and write the scans (points in the scanner frame S), "
-                    "the workpiece model X-A, the reference model B-P and truth.json (U, V, W, ^B S).")
+                    "the workpiece model X-A, the reference model B-P, a sample finishing toolpath in X (toolpath.nc) and truth.json (U, V, W, ^B S).")
     p.add_argument("--out", required=True, metavar="DIR", help="folder to write into (created if missing)")
     p.add_argument("--workpiece", choices=["car", "figurine"], default="car",
                    help="the 25 cm car model or the 2 cm figurine (default car)")
@@ -37,26 +40,32 @@ def add_parser(subparsers):
 def run(args) -> int:
     if args.positions < 1:
         raise InputError(f"--positions must be at least 1, got {args.positions}")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     edits = [kind for kind, wanted in (("lump", args.lump), ("carve", args.carve)) if wanted]
-    scene = build_scene(args.workpiece, seed=args.seed, clutter=args.clutter, clay_change=edits)
-    settings = {"noise_sigma_mm": args.noise} if args.noise is not None else {}
-    if args.pitch is not None:
-        settings["pixel_pitch_mm"] = args.pitch
-    scanners = scanner_ring(scene, args.positions, seed=args.seed, **settings)
+    scene, scans = write_simulation(Path(args.out), args.workpiece, seed=args.seed, positions=args.positions,
+                                    noise=args.noise, pitch=args.pitch, clutter=args.clutter, clay_change=edits)
+    _print_summary(scene, scans, Path(args.out))
+    return EXIT_OK
 
+
+def write_simulation(out: Path, workpiece: str = "car", *, seed: int = 0, positions: int = 1, noise=None, pitch=None,
+                     clutter: bool = False, clay_change=()):
+    """Simulate and write scan(s), workpiece.ply (X-A), reference.ply (B-P), toolpath.nc (X-m) and truth.json."""
+    out.mkdir(parents=True, exist_ok=True)
+    scene = build_scene(workpiece, seed=seed, clutter=clutter, clay_change=list(clay_change))
+    settings = {"noise_sigma_mm": noise} if noise is not None else {}
+    if pitch is not None:
+        settings["pixel_pitch_mm"] = pitch
     scans = []
-    for i, scanner in enumerate(scanners, start=1):
+    for i, scanner in enumerate(scanner_ring(scene, positions, seed=seed, **settings), start=1):
         result = scanner.scan(scene)
-        name = "scan.ply" if len(scanners) == 1 else f"scan_{i}.ply"
+        name = "scan.ply" if positions == 1 else f"scan_{i}.ply"
         write_ply(out / name, Cloud(result.points, name=name))
         scans.append((name, result))
     write_ply(out / "workpiece.ply", scene.workpiece_model())
     write_ply(out / "reference.ply", scene.reference_model())
+    atomic_write_text(out / "toolpath.nc", format_gcode(sample_toolpath(scene)))
     write_truth(out / "truth.json", scene_truth(scene, scans))
-    _print_summary(scene, scans, out)
-    return EXIT_OK
+    return scene, scans
 
 
 def _print_summary(scene, scans, out: Path) -> None:
@@ -72,4 +81,4 @@ def _print_summary(scene, scans, out: Path) -> None:
         counts = ", ".join(f"{role} {n}" for role, n in result.counts().items())
         print(f"{name}: {len(result.points)} points ({counts}), pitch {result.scanner.pixel_pitch_mm:.3f} mm, "
               f"Omega U {frames.omega(result.U):.2f} deg, V {frames.omega(result.V):.2f} deg")
-    print(f"wrote {out}: {', '.join(name for name, _ in scans)}, workpiece.ply, reference.ply, truth.json")
+    print(f"wrote {out}: {', '.join(name for name, _ in scans)}, workpiece.ply, reference.ply, toolpath.nc, truth.json")

@@ -26,3 +26,7 @@ def require_open3d():
             "sudo apt-get install python3-open3d  (elsewhere: pip install open3d)"
         ) from exc
     return open3d
+
+
+class Cancelled(WorkCalError):
+    """The user stopped a long job; whatever it was building is discarded."""

@@ -114,6 +114,7 @@ class CalibrationResult:
     quality_gates: list = field(default_factory=list)  # {"name", "value", "limit", "passed", "unit"}
     tolerance_mm: float = 0.3
     inputs: dict = field(default_factory=dict)
+    regions: dict = field(default_factory=dict)  # scan point indices per role and how they were found
     warnings: list = field(default_factory=list)
     reasons: list = field(default_factory=list)
     time_s: float = 0.0

@@ -43,3 +43,17 @@ def sample_toolpath_points(workpiece, upright=None, patch_fraction: float = 0.4,
     if len(path) == 0:
         raise InputError(f"{mesh.name}: no surface under the toolpath patch")
     return frames.apply(upright, path), feed_mm_min
+
+
+def sample_toolpath(scene, retract_mm: float = 20.0):
+    """The finishing pass as a Toolpath in X: rapid above the first point, the raster at the feed,
+    rapid back up; the tool axis is the workpiece's up direction (z of its upright frame) in X."""
+    from ..toolpath.model import LINEAR, RAPID, Move, Toolpath
+
+    points, feed = sample_toolpath_points(scene)
+    up = scene.workpiece_upright[:3, 2]
+    moves = [Move(RAPID, points[0] + retract_mm * up, tool_axis=up)]
+    moves += [Move(LINEAR, p, feed=feed, tool_axis=up) for p in points]
+    moves.append(Move(RAPID, points[-1] + retract_mm * up, tool_axis=up))
+    return Toolpath(moves, header=[f"WorkCal sample finishing pass over {scene.workpiece_original.name}, "
+                                   "workpiece frame X, mm"], source="sample toolpath")

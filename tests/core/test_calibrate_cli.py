@@ -1,0 +1,75 @@
+"""`python3 -m workcal_wb calibrate` and `demo` from files, as a user runs them."""
+import json
+
+import numpy as np
+import pytest
+
+from workcal_wb.cli import main
+from workcal_wb.cli.simulate import write_simulation
+from workcal_wb.core import frames
+from workcal_wb.core.toolpath import read_gcode
+
+
+@pytest.fixture(scope="module")
+def scene_files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("scene")
+    write_simulation(folder, "car", seed=7, pitch=0.6)
+    truth = json.loads((folder / "truth.json").read_text())
+    return folder, np.array(truth["W"])
+
+
+def _args(folder, out, *extra):
+    return ["calibrate", "--scan", str(folder / "scan.ply"), "--workpiece", str(folder / "workpiece.ply"),
+            "--reference", str(folder / "reference.ply"), "--out", str(out), *extra]
+
+
+def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path, capsys):
+    folder, W_true = scene_files
+    assert main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"))) == 0
+    result = json.loads((tmp_path / "result.json").read_text())
+    W = np.array(result["W"])
+    assert result["status"] == "ok" and W.shape == (4, 4)
+    assert frames.rotation_between_deg(W, W_true) < 0.02 and np.linalg.norm(W[:3, 3] - W_true[:3, 3]) < 0.05
+    assert np.allclose(W, np.linalg.inv(np.array(result["V"])) @ np.array(result["U"]))
+    assert (tmp_path / "report.html").stat().st_size > 1000
+    original = read_gcode(folder / "toolpath.nc").points()
+    calibrated = read_gcode(tmp_path / "toolpath_calibrated.nc").points()
+    assert np.abs(calibrated - frames.apply(W, original)).max() < 1e-3  # written to 4 decimals
+    assert "calibration OK" in capsys.readouterr().out
+
+
+def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):
+    folder, _ = scene_files
+    # Both "regions" are a patch of bare platform in front of the objects: nothing to fix a pose on.
+    box = ["-1000", "-1000", "-1000", "1000", "1000", "1000"]
+    code = main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"), "--workpiece-indices",
+                      str(_indices(tmp_path, range(0, 3000))), "--reference-box", *box))
+    assert code == 1
+    assert json.loads((tmp_path / "result.json").read_text())["status"] == "failed"
+    assert not (tmp_path / "toolpath_calibrated.nc").exists()
+
+
+def _indices(folder, values):
+    path = folder / "indices.txt"
+    path.write_text("\n".join(str(v) for v in values))
+    return path
+
+
+def test_bad_input_exits_2_and_writes_nothing(scene_files, tmp_path, capsys):
+    folder, _ = scene_files
+    empty = tmp_path / "empty.ply"
+    empty.write_text("")
+    out = tmp_path / "out"
+    code = main(["calibrate", "--scan", str(folder / "scan.ply"), "--workpiece", str(empty),
+                 "--reference", str(folder / "reference.ply"), "--out", str(out)])
+    assert code == 2 and not out.exists()
+    assert "empty.ply" in capsys.readouterr().err
+
+
+def test_demo_runs_the_whole_job(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    check = json.loads((tmp_path / "truth_check.json").read_text())
+    assert check["rotation_deg"] < 0.02 and check["translation_mm"] < 0.05
+    for name in ("result.json", "report.html", "toolpath_calibrated.nc", "toolpath_calibrated.src"):
+        assert (tmp_path / name).exists(), name
+    assert "error against the known truth" in capsys.readouterr().out

@@ -1,0 +1,190 @@
+"""Calibration on simulated scenes with exact truth: W, regions, uncertainty, gates and bad input."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from workcal_wb.core import frames
+from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
+from workcal_wb.core.errors import Cancelled, InputError
+from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.regions import find_regions
+from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.simulate import shapes
+from workcal_wb.core.simulate.scanner import Scanner
+from workcal_wb.core.simulate.scene import build_scene
+from workcal_wb.core.simulate.toolpath_sample import sample_toolpath_points
+
+# An ~90k-point scene scan (the paper's scanner zoomed out a little): quick, and the size of the speed target.
+IMAGE = (368, 276)
+
+
+def _scan(scene, seed=0, **settings):
+    scanner = Scanner.aimed_at(scene, seed=seed, **settings)
+    scanner = replace(scanner, image_size=IMAGE, pixel_pitch_mm=scanner.pixel_pitch_mm * 640 / IMAGE[0])
+    return scanner.scan(scene)
+
+
+@pytest.fixture(scope="module")
+def car():
+    scene = build_scene("car", seed=3)
+    scan = _scan(scene)
+    toolpath, _ = sample_toolpath_points(scene)
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), toolpath_points=toolpath)
+    return scene, scan, toolpath, result
+
+
+def _errors(W, W_true):
+    return frames.rotation_between_deg(W, W_true), float(np.linalg.norm(W[:3, 3] - W_true[:3, 3]))
+
+
+def test_automatic_calibration_recovers_W(car):
+    scene, scan, _, result = car
+    assert result.status == "ok", result.reasons
+    rotation, translation = _errors(result.W, scene.W)
+    assert rotation < 0.02 and translation < 0.05
+    assert np.allclose(result.W, frames.invert(result.V) @ result.U)  # equation (1)
+    assert _errors(result.U, scan.U)[0] < 0.02 and _errors(result.V, scan.V)[0] < 0.02
+
+
+def test_automatic_regions_are_the_true_objects(car):
+    _, scan, _, result = car
+    for role in ("workpiece", "reference"):
+        picked = np.array(result.regions[role])
+        truth = scan.mask(role)
+        assert truth[picked].mean() > 0.99, f"{role} region precision"
+        assert truth[picked].sum() / truth.sum() > 0.95, f"{role} region recall"
+    assert result.regions["source"] == "auto"
+
+
+def test_uncertainty_bounds_the_true_error_at_the_toolpath(car):
+    scene, _, toolpath, result = car
+    actual = np.linalg.norm(frames.apply(result.W, toolpath) - frames.apply(scene.W, toolpath), axis=1).max()
+    bound = result.uncertainty["toolpath_bound_mm"]
+    assert actual <= bound <= 0.3  # honest (covers the error) and useful (within the milling tolerance)
+    assert result.uncertainty["surface_bound_mm"] > 0
+    assert all(g["passed"] for g in result.quality_gates)
+
+
+def test_user_regions_give_the_same_W(car):
+    scene, scan, _, automatic = car
+    regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
+    assert result.status == "ok" and result.regions["source"] == "user"
+    assert _errors(result.W, scene.W)[0] < 0.02 and _errors(result.W, automatic.W)[1] < 0.05
+
+
+def test_result_round_trips_through_json(car, tmp_path):
+    result = car[3]
+    result.to_json(tmp_path / "result.json")
+    back = CalibrationResult.from_json(tmp_path / "result.json")
+    assert np.allclose(back.W, result.W) and back.status == result.status
+    assert back.regions["workpiece"] == result.regions["workpiece"]
+    assert back.uncertainty == pytest.approx(result.uncertainty)
+
+
+def test_clay_lump_and_carving_do_not_bias_W():
+    scene = build_scene("car", seed=5, clay_change=["lump", "carve"])
+    scan = _scan(scene)
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model())
+    assert result.status == "ok", result.reasons
+    rotation, translation = _errors(result.W, scene.W)
+    assert rotation < 0.05 and translation < 0.1
+
+
+def test_two_captures_from_one_position_are_merged():
+    scene = build_scene("car", seed=1)
+    first, second = _scan(scene, seed=1), _scan(scene, seed=2)
+    result = calibrate([first.cloud(name="a"), second.cloud(name="b")], scene.workpiece_model(), scene.reference_model())
+    assert result.inputs["scan_points"] == len(first.points) + len(second.points)
+    assert result.status == "ok" and _errors(result.W, scene.W)[1] < 0.05
+
+
+def test_progress_is_reported_and_cancel_stops():
+    scene = build_scene("car", seed=2)
+    scan = _scan(scene)
+    seen = []
+    calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), progress=lambda f, m: seen.append(f),
+              options=CalibrationOptions(resamples=2))
+    assert seen[0] == 0.0 and seen[-1] == 1.0 and seen == sorted(seen)
+
+    def cancel(fraction, message):
+        if fraction > 0.2:
+            raise Cancelled("stopped by the user")
+
+    with pytest.raises(Cancelled):
+        calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), progress=cancel)
+
+
+def test_find_regions_alone():
+    scene = build_scene("figurine", seed=0)
+    scan = _scan(scene)
+    regions = find_regions(scan.cloud(), scene.workpiece_model(), scene.reference_model())
+    workpiece, platform = scan.mask("workpiece"), scan.mask("platform")
+    assert workpiece[regions["workpiece"]].mean() > 0.99 and workpiece[regions["workpiece"]].sum() > 0.9 * workpiece.sum()
+    # The platform band also takes the bottom millimetre of the objects standing on it.
+    assert platform[regions["platform"]].mean() > 0.95 and platform[regions["platform"]].sum() > 0.99 * platform.sum()
+
+
+# --- bad input: a clear error, or a failed status that says why -------------------------------------------
+
+@pytest.fixture(scope="module")
+def plain():
+    scene = build_scene("car", seed=4)
+    return scene, _scan(scene)
+
+
+def test_reference_out_of_view_is_named(plain):
+    scene, scan = plain
+    without = Cloud(scan.points[~scan.mask("reference")], name="scan without block")
+    with pytest.raises(InputError, match=r"reference object .*not found in scan without block"):
+        calibrate(without, scene.workpiece_model(), scene.reference_model())
+
+
+def test_wrong_reference_model_is_named(plain):
+    scene, scan = plain
+    wrong = shapes.ellipsoid().transformed(scene.reference.pose)
+    wrong.name = "ellipsoid.stl"
+    with pytest.raises(InputError, match="reference object ellipsoid.stl: not found"):
+        calibrate(scan.cloud(), scene.workpiece_model(), wrong)
+
+
+def test_workpiece_missing_is_named(plain):
+    scene, scan = plain
+    without = Cloud(scan.points[~scan.mask("workpiece")], name="empty platform")
+    with pytest.raises(InputError, match="workpiece .*not found in empty platform"):
+        calibrate(without, scene.workpiece_model(), scene.reference_model())
+
+
+def test_workpiece_region_on_the_platform_fails_with_the_reason(plain):
+    scene, scan = plain
+    platform = np.flatnonzero(scan.mask("platform"))[:5000]
+    regions = {"workpiece": platform, "reference": np.flatnonzero(scan.mask("reference"))}
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
+    assert result.status == "failed" and result.W is None
+    assert any("workpiece" in r and "planar" in r for r in result.reasons), result.reasons
+
+
+def test_scans_in_different_units_are_refused():
+    a = Cloud(np.random.default_rng(0).normal(size=(500, 3)) * 100, name="scan_mm.ply")
+    b = Cloud(a.points / 1000, name="scan_m.ply")
+    with pytest.raises(InputError, match="scan_m.ply: .*different units"):
+        merge_scans([a, b])
+
+
+def test_toolpath_in_inches_is_refused(plain):
+    scene, scan = plain
+    toolpath, _ = sample_toolpath_points(scene)
+    with pytest.raises(InputError, match="toolpath: .*another unit or frame"):
+        calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), toolpath_points=toolpath / 25.4)
+
+
+@pytest.mark.parametrize("regions, message", [
+    ({"workpiece": [], "reference": [1, 2, 3]}, "workpiece region: empty"),
+    ({"workpiece": [1, 2, 3]}, "reference region: not given"),
+    ({"workpiece": [10**9], "reference": [1]}, "workpiece region: indices outside"),
+])
+def test_bad_regions(plain, regions, message):
+    scene, scan = plain
+    with pytest.raises(InputError, match=message):
+        calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)

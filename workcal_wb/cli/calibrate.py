@@ -1,0 +1,126 @@
+"""``workcal calibrate``: a scene scan, the workpiece and reference models in; W, the report and the calibrated toolpath out."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.core import frames
+from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.readers import read_cloud
+from workcal_wb.core.result import OK
+from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
+from workcal_wb.core.toolpath.transform import path_points
+
+UNITS = ("mm", "m", "in")
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "calibrate", help="find W = ^B X from one scene scan and write result.json, report.html and the toolpath",
+        description="Match the workpiece model X-A and the reference model B-P into one scan of the scene (regions "
+                    "found automatically unless given), compute U = ^S X, V = ^S B and W = V^-1 U = ^B X, check the "
+                    "quality gates, and write result.json, report.html and, with --toolpath, the calibrated program. "
+                    "Exit status: 0 ok or ambiguous, 1 failed, 2 bad input.")
+    p.add_argument("--scan", nargs="+", required=True, metavar="FILE",
+                   help="scene scan(s) from one scanner position (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
+    p.add_argument("--workpiece", required=True, metavar="FILE", help="workpiece model X-A (mesh or point cloud)")
+    p.add_argument("--reference", required=True, metavar="FILE",
+                   help="reference model B-P, in robot base frame coordinates (mesh or point cloud)")
+    p.add_argument("--units", choices=UNITS, default="mm", help="units of the scan files (default mm)")
+    p.add_argument("--model-units", choices=UNITS, help="units of the model files (default: as --units)")
+    p.add_argument("--toolpath", metavar="FILE", help="G-code toolpath in workpiece coordinates X (mm unless G20)")
+    p.add_argument("--format", choices=list(FORMATS), default="gcode",
+                   help="format of the calibrated toolpath (default gcode)")
+    p.add_argument("--out", default="workcal-out", metavar="DIR", help="folder for the outputs (default workcal-out)")
+    p.add_argument("--tolerance", type=float, default=0.3, metavar="MM",
+                   help="quality tolerance for residuals and toolpath uncertainty (default 0.3 mm)")
+    p.add_argument("--method", choices=["robust", "icp", "hausdorff"], default="robust", help="matching method")
+    p.add_argument("--seed", type=int, default=0, help="seed for the random parts (repeatable runs)")
+    for role in ("workpiece", "reference"):
+        p.add_argument(f"--{role}-indices", metavar="FILE",
+                       help=f"{role} region as a text file of scan point indices (0-based); needs the other region too")
+        p.add_argument(f"--{role}-box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+                       help=f"{role} region as a box in scanner coordinates, mm")
+    p.add_argument("--force", action="store_true",
+                   help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
+    return p
+
+
+def _regions(args, scan: Cloud):
+    given = {role: (getattr(args, f"{role}_indices"), getattr(args, f"{role}_box")) for role in ("workpiece", "reference")}
+    if not any(v for pair in given.values() for v in pair):
+        return None
+    regions = {}
+    for role, (indices, box) in given.items():
+        if indices and box:
+            raise InputError(f"--{role}-indices and --{role}-box: give one of them, not both")
+        if indices:
+            try:
+                regions[role] = np.loadtxt(indices, dtype=np.int64, ndmin=1)
+            except (OSError, ValueError) as exc:
+                raise InputError(f"{indices}: not a list of integer point indices ({exc})") from exc
+        elif box:
+            lo, hi = np.array(box[:3]), np.array(box[3:])
+            inside = np.all((scan.points >= lo) & (scan.points <= hi), axis=1)
+            regions[role] = np.flatnonzero(inside)
+        else:
+            raise InputError(f"the {role} region is missing: give both regions, or none for automatic regions")
+    return regions
+
+
+def run(args) -> int:
+    from workcal_wb.core.report import write_report
+
+    scans = [read_cloud(f, units=args.units) for f in args.scan]
+    for cloud in scans:
+        for warning in cloud.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+    model_units = args.model_units or args.units
+    workpiece = read_cloud(args.workpiece, units=model_units)
+    reference = read_cloud(args.reference, units=model_units)
+    toolpath = read_gcode(args.toolpath) if args.toolpath else None
+    merged = merge_scans(scans)
+    options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)
+    result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
+                       toolpath_points=None if toolpath is None else path_points(toolpath)[0])
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    result.to_json(out / "result.json")
+    workpiece_points = merged.points[result.regions["workpiece"]] if result.regions.get("workpiece") else None
+    report = write_report(result, out, workpiece_points=workpiece_points, workpiece_model=workpiece)
+    print(summary(result))
+    print(f"wrote {out / 'result.json'}, {report['html']}")
+    if toolpath is not None:
+        program = out / f"toolpath_calibrated{FORMATS[args.format].EXTENSION}"
+        try:
+            export(toolpath, result, args.format, program, force=args.force, calibration_source=str(out / "result.json"))
+            print(f"wrote {program}" + (" (FORCED)" if result.status != OK else ""))
+        except ExportRefused as exc:
+            print(f"workcal calibrate: toolpath not written: {exc}", file=sys.stderr)
+    return EXIT_OK if result.W is not None and result.status != "failed" else EXIT_FAILED
+
+
+def summary(result) -> str:
+    """W, its angles and the quality in a few lines."""
+    lines = [f"calibration {result.status.upper()} in {result.time_s:.2f} s"]
+    lines += [f"  reason: {r}" for r in result.reasons]
+    if result.W is not None:
+        phi, theta, psi = frames.euler_zyz(result.W)
+        lines.append("W = ^B X (workpiece frame in the robot base frame, mm):")
+        lines += ["  " + " ".join(f"{v:12.5f}" for v in row) for row in result.W]
+        lines.append(f"  Euler ZYZ {phi:.4f} {theta:.4f} {psi:.4f} deg, Omega {frames.omega(result.W):.4f} deg")
+    for role, m in (("workpiece", result.workpiece), ("reference", result.reference)):
+        if m is not None and m.matrix is not None:
+            lines.append(f"  {role}: {m.status}, RMS {m.rms_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
+                         f"{m.tolerance_mm} mm, {m.n_inliers} points")
+    for key, value in result.uncertainty.items():
+        if key.endswith("_mm") or key.endswith("_deg"):
+            lines.append(f"  uncertainty {key}: {value:.4f}")
+    lines += [f"  warning: {w}" for w in result.warnings]
+    return "\n".join(lines)

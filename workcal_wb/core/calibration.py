@@ -1,0 +1,243 @@
+"""One scene scan in, W = ^B X = V^-1 U out, with an honest uncertainty and quality gates.
+
+U = ^S X comes from matching the workpiece region of the scan against X-A, V = ^S B from matching
+the reference region against B-P (whose points are given in the robot base frame B).  Equation (1)
+of the paper, W = V^-1 U, is the workpiece frame in the robot base frame: what the robot needs to
+place the toolpath, B-m = W X-m.  (The paper's Table 1 prints its inverse, U^-1 V; see
+docs/architecture.md.)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import frames
+from .errors import InputError
+from .geometry import Cloud
+from .match import match
+from .regions import MIN_WITHIN_TOLERANCE_PCT, locate
+from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
+from .surface import SurfaceModel
+
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """Knobs of a calibration; lengths in mm."""
+
+    tolerance_mm: float = 0.3  # the paper's milling need: residuals and toolpath uncertainty must stay within it
+    method: str = "robust"
+    resamples: int = 6  # bootstrap refits of both matches for the uncertainty
+    resample_points: int = 4000
+    seed: int = 0
+
+
+# The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
+UNCERTAINTY_FACTOR = 3.0
+# Scans of one scene taken in the same units have extents within this factor of each other.
+UNIT_MISMATCH_RATIO = 8.0
+# A toolpath works on the part: its median distance to the model surface, as a fraction of the model
+# diagonal, stays below this unless it was written in another unit or frame.
+TOOLPATH_MAX_MEDIAN_DISTANCE = 0.2
+SURFACE_SAMPLES = 2000
+
+
+def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None,
+              options: CalibrationOptions = CalibrationOptions(), progress=None) -> CalibrationResult:
+    """Compute U, V and W from a scene scan (one Cloud or several captures from the same position).
+
+    ``workpiece`` (X-A) and ``reference`` (B-P, in B) are Clouds or prepared SurfaceModels.
+    ``regions``: None to find them automatically, or {"workpiece": indices, "reference": indices}
+    into the concatenated scan points.  ``toolpath_points`` (N x 3, mm, in X) are where the
+    uncertainty matters most.  ``progress(fraction, message)`` is called as work proceeds; it may
+    raise errors.Cancelled to stop.  Bad input raises InputError; a calibration that cannot be
+    trusted comes back with status "failed" or "ambiguous" and the reasons.
+    """
+    started = time.perf_counter()
+    report = progress or (lambda fraction, message: None)
+    scan = merge_scans(scans)
+    report(0.0, "preparing the models")
+    surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, options.seed) for m in (workpiece, reference)]
+    workpiece_surface, reference_surface = surfaces
+    if toolpath_points is not None:
+        toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
+    match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed)
+    warnings = list(scan.warnings)
+
+    if regions is None:
+        found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
+                       progress=lambda f, m: report(0.6 * f, m))
+        warnings += found.warnings
+        region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
+        source = "auto"
+        report(0.6, "refining both matches on their regions")
+        U_match = _refit(scan, region_idx["workpiece"], workpiece_surface, found.workpiece_match, match_options, "workpiece")
+        V_match = _refit(scan, region_idx["reference"], reference_surface, found.reference_match, match_options, "reference")
+    else:
+        region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
+        source = "user"
+        report(0.1, "matching the reference region")
+        V_match = match(_region_cloud(scan, region_idx["reference"], "reference"), reference_surface, **match_options)
+        report(0.35, "matching the workpiece region")
+        U_match = match(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface, **match_options)
+
+    result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
+                  inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
+                  regions={**{k: np.asarray(v).tolist() for k, v in region_idx.items()}, "source": source},
+                  warnings=warnings + [f"workpiece match: {w}" for w in U_match.warnings]
+                  + [f"reference match: {w}" for w in V_match.warnings])
+    failed = [(role, m) for role, m in (("workpiece", U_match), ("reference", V_match)) if m.matrix is None]
+    if failed:
+        reasons = [f"{role} match failed: {r}" for role, m in failed for r in m.reasons]
+        return CalibrationResult(FAILED, W=None, U=U_match.matrix, V=V_match.matrix, reasons=reasons,
+                                 time_s=time.perf_counter() - started, **result)
+
+    U, V = U_match.matrix, V_match.matrix
+    W = frames.invert(V) @ U
+    report(0.75, "estimating the uncertainty")
+    uncertainty = _uncertainty(scan, region_idx, (workpiece_surface, reference_surface), (U, V), W,
+                               toolpath_points, options, match_options)
+    gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm)
+    status, reasons = _status(U_match, V_match, gates)
+    report(1.0, f"calibration {status}")
+    return CalibrationResult(status, W=W, U=U, V=V, uncertainty=uncertainty, quality_gates=gates, reasons=reasons,
+                             time_s=time.perf_counter() - started, **result)
+
+
+def merge_scans(scans) -> Cloud:
+    """Captures from one scanner position, as one cloud; captures in different units are refused."""
+    clouds = [scans] if isinstance(scans, Cloud) else list(scans)
+    if not clouds:
+        raise InputError("no scan given")
+    sizes = [c.diagonal() for c in clouds]
+    for cloud, size in zip(clouds, sizes):
+        if len(cloud) == 0:
+            raise InputError(f"{cloud.name}: the scan has no points")
+        if size > 0 and max(sizes) / size > UNIT_MISMATCH_RATIO:
+            raise InputError(f"{cloud.name}: extent {size:.4g} mm against {max(sizes):.4g} mm for the other capture(s): "
+                             "the scans seem to be in different units (check --units per file)")
+    if len(clouds) == 1:
+        return clouds[0]
+    points = np.vstack([c.points for c in clouds])
+    return Cloud(points, name=" + ".join(c.name for c in clouds), warnings=[w for c in clouds for w in c.warnings])
+
+
+def _checked_toolpath(points, surface: SurfaceModel) -> np.ndarray:
+    """Toolpath points (X, mm) that plausibly work on the model: a path in inches or in another frame
+    lies far from the model surface and is refused before it can place anything."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(points) == 0 or not np.isfinite(points).all():
+        raise InputError("toolpath: points must be finite and not empty")
+    distance = float(np.median(surface.tree.query(points)[0]))
+    if distance > TOOLPATH_MAX_MEDIAN_DISTANCE * surface.diagonal:
+        raise InputError(f"toolpath: its points lie a median {distance:.1f} mm from the workpiece model {surface.name} "
+                         f"(diagonal {surface.diagonal:.1f} mm): it is in another unit or frame than the model X-A")
+    return points
+
+
+def _region(scan: Cloud, regions: dict, role: str) -> np.ndarray:
+    idx = regions.get(role)
+    if idx is None:
+        raise InputError(f"{role} region: not given (pass both regions, or none for automatic regions)")
+    idx = np.asarray(idx)
+    if idx.dtype == bool:
+        if len(idx) != len(scan):
+            raise InputError(f"{role} region: a mask of {len(idx)} values for a scan of {len(scan)} points")
+        idx = np.flatnonzero(idx)
+    idx = idx.astype(np.int64).ravel()
+    if len(idx) == 0:
+        raise InputError(f"{role} region: empty; pick the {role} in the scan or use automatic regions")
+    if idx.min() < 0 or idx.max() >= len(scan):
+        raise InputError(f"{role} region: indices outside the scan's {len(scan)} points")
+    return np.unique(idx)
+
+
+def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
+    return scan.subset(idx, name=f"{role} region of {scan.name}")
+
+
+def _refit(scan, idx, surface, found: MatchResult, options: dict, role: str) -> MatchResult:
+    """The match on the final region, started from the pose found while locating it; its candidates
+    and ambiguity come from the global search that found it."""
+    refit = match(_region_cloud(scan, idx, role), surface, init=found.matrix, **options)
+    if refit.status == OK and found.status == AMBIGUOUS:
+        refit.status, refit.reasons, refit.candidates = AMBIGUOUS, found.reasons, found.candidates
+    refit.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **refit.timings_s}
+    refit.time_s += found.time_s
+    return refit
+
+
+def _inputs(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toolpath_points) -> dict:
+    return {"scan": scan.name, "scan_points": len(scan), "workpiece_model": workpiece.name,
+            "reference_model": reference.name,
+            "toolpath_points": 0 if toolpath_points is None else len(toolpath_points)}
+
+
+def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, match_options) -> dict:
+    """Displacement bound of W at the toolpath and at the workpiece surface, from bootstrap refits.
+
+    Each refit draws the points of both regions with replacement and refines both poses; the spread
+    of the resulting W is what the data supports.  Refits use a subset, so their spread is scaled to
+    the full regions by sqrt(subset / region size) and then multiplied by UNCERTAINTY_FACTOR.  The
+    studies check the bound against the true error (docs/studies.md).
+    """
+    rng = np.random.default_rng(options.seed + 1)
+    roles = ("workpiece", "reference")
+    sizes = {role: len(regions[role]) for role in roles}
+    n = {role: min(sizes[role], options.resample_points) for role in roles}
+    workpiece_surface = surfaces[0]
+    surface_points = workpiece_surface.points[
+        rng.choice(len(workpiece_surface.points), min(SURFACE_SAMPLES, len(workpiece_surface.points)), replace=False)]
+    targets = {"surface": surface_points}
+    if toolpath_points is not None:
+        targets["toolpath"] = toolpath_points
+    squared = {k: np.zeros(len(p)) for k, p in targets.items()}
+    rotations = []
+    for _ in range(options.resamples):
+        refit = []
+        for role, surface, pose in zip(roles, surfaces, poses):
+            draw = rng.choice(regions[role], n[role], replace=True)
+            refit.append(match(scan.subset(draw, name=f"{role} resample"), surface, init=pose, **match_options).matrix)
+        W_r = frames.invert(refit[1]) @ refit[0]
+        rotations.append(frames.rotation_between_deg(W_r, W))
+        for key, p in targets.items():
+            squared[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
+    scale = max(np.sqrt(n[r] / sizes[r]) for r in roles)
+    out = {"method": f"bootstrap: {options.resamples} refits of both matches on {n['workpiece']} + {n['reference']} "
+                     f"resampled points, RMS spread scaled by sqrt(subset/region) x {UNCERTAINTY_FACTOR:g}",
+           "rotation_bound_deg": float(UNCERTAINTY_FACTOR * scale * np.sqrt(np.mean(np.square(rotations))))}
+    for key, total in squared.items():
+        per_point = UNCERTAINTY_FACTOR * scale * np.sqrt(total / options.resamples)
+        out[f"{key}_bound_mm"] = float(per_point.max())
+        out[f"{key}_median_mm"] = float(np.median(per_point))
+    return out
+
+
+def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float) -> list:
+    gates = []
+    for role, m in (("workpiece", U_match), ("reference", V_match)):
+        gates.append({"name": f"{role} match status", "value": m.status, "limit": OK, "passed": m.status == OK, "unit": ""})
+        gates.append({"name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
+                      "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})
+        share = MIN_WITHIN_TOLERANCE_PCT[role]
+        gates.append({"name": f"{role} points within tolerance", "value": m.within_tolerance_pct, "limit": share,
+                      "passed": bool(m.within_tolerance_pct >= share), "unit": "%"})
+    key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
+    where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
+    value = uncertainty[key]
+    gates.append({"name": f"uncertainty at the {where}", "value": value, "limit": tolerance,
+                  "passed": bool(value <= tolerance), "unit": "mm"})
+    return gates
+
+
+def _status(U_match: MatchResult, V_match: MatchResult, gates: list) -> tuple[str, list]:
+    reasons = [f"{role} match: {r}" for role, m in (("workpiece", U_match), ("reference", V_match)) for r in m.reasons]
+    numeric_failures = [g for g in gates if not g["passed"] and g["unit"]]
+    reasons += [f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} {g['unit']}"
+                for g in numeric_failures]
+    if FAILED in (U_match.status, V_match.status) or numeric_failures:
+        return FAILED, reasons
+    if AMBIGUOUS in (U_match.status, V_match.status):
+        return AMBIGUOUS, reasons
+    return OK, reasons

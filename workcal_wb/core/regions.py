@@ -1,0 +1,183 @@
+"""Automatic scan regions: remove the platform, split what stands on it, find the reference and the workpiece.
+
+The reference object and the platform are a constant scene, so no operator has to pick regions:
+the largest plane seen is the platform; the points above it fall apart into objects; the reference
+model is matched against the objects most like it in size; the workpiece is what remains and
+matches its model.  The matches found on the way are kept, so calibration does not repeat them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from . import frames, pointops
+from .errors import InputError
+from .geometry import Cloud
+from .match import match
+from .result import FAILED, MatchResult
+from .surface import SurfaceModel
+
+# The platform must hold at least this fraction of the scan to count as one.
+MIN_PLATFORM_FRACTION = 0.15
+PLANE_RANSAC_TRIALS = 300
+PLANE_SAMPLE_POINTS = 5000
+# Points this close to the platform plane (mm, plus a few scan spacings) are platform.
+PLATFORM_BAND_MM = 1.0
+# Objects are split where the gap between points exceeds this many scan spacings.
+LINK_SPACINGS = 4.0
+# A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
+SIZE_RATIO_RANGE = (0.15, 1.5)
+MIN_CLUSTER_POINTS = 100
+# A cluster belongs to the workpiece when this fraction of it lies near the placed workpiece model
+# (lumps of clay added later are connected to it and come along).
+WORKPIECE_CLUSTER_SHARE = 0.5
+# A match only locates an object when most matched points lie within the tolerance: the reference is
+# rigid and unchanged; the workpiece may have had clay added or carved.  A wrong object placed
+# "as well as it goes" scores far lower (measured 10-30 % for an ellipsoid or the L-block on a car).
+MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": 50.0}
+
+
+@dataclass
+class Located:
+    """Regions as scan indices, and the matches that found them."""
+
+    workpiece: np.ndarray
+    reference: np.ndarray
+    platform: np.ndarray
+    workpiece_match: MatchResult
+    reference_match: MatchResult
+    warnings: list
+
+    def as_dict(self) -> dict:
+        return {"workpiece": self.workpiece, "reference": self.reference, "platform": self.platform,
+                "source": "auto", "warnings": list(self.warnings)}
+
+
+def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0) -> dict:
+    """The workpiece, reference and platform regions of ``scan`` as index arrays (see ``locate``)."""
+    surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, seed) for m in (workpiece, reference)]
+    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed).as_dict()
+
+
+def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
+           seed: int = 0, progress=None) -> Located:
+    """Find the reference and the workpiece in a scene scan; InputError names what could not be found."""
+    points = scan.points
+    valid = np.flatnonzero(np.isfinite(points).all(axis=1))
+    if len(valid) < MIN_CLUSTER_POINTS:
+        raise InputError(f"{scan.name}: only {len(valid)} valid points; a scene scan needs far more")
+    rng = np.random.default_rng(seed)
+    spacing = pointops.median_spacing(points[valid], seed=seed)
+    warnings = []
+    platform = _platform(points[valid], spacing, rng)
+    if platform is None:
+        warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
+                        "points); every point is treated as an object")
+        platform_idx, objects = np.empty(0, dtype=np.int64), valid
+    else:
+        platform_idx, objects = valid[platform], valid[~platform]
+    labels = _clusters(points[objects], LINK_SPACINGS * spacing)
+    report = progress or (lambda fraction, message: None)
+
+    report(0.1, f"looking for the reference {reference.name}")
+    options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3)
+    reference_match = _first_match(scan, points, objects, labels, reference, options, "reference")
+    if reference_match is None:
+        raise InputError(f"reference object {reference.name}: not found in {scan.name} (no object standing on the "
+                         "platform matches its model); is the reference in view, and is its model the right one?")
+    near_reference = _near(points[objects], reference, reference_match.matrix, max(2.0, 3 * spacing))
+    reference_idx = objects[near_reference]
+
+    report(0.3, f"looking for the workpiece {workpiece.name}")
+    rest, rest_labels = objects[~near_reference], labels[~near_reference]
+    workpiece_match = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
+    if workpiece_match is None:
+        raise InputError(f"workpiece {workpiece.name}: not found in {scan.name}: no object left after removing the "
+                         f"platform and the reference matches its model (objects tried: "
+                         f"{len(_candidates(points, rest, rest_labels, workpiece))})")
+    on_model = _near(points[rest], workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
+    share = np.bincount(rest_labels, weights=on_model, minlength=rest_labels.max() + 1) / np.maximum(
+        np.bincount(rest_labels, minlength=rest_labels.max() + 1), 1)
+    workpiece_idx = rest[share[rest_labels] >= WORKPIECE_CLUSTER_SHARE]
+    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings)
+
+
+def _platform(points: np.ndarray, spacing: float, rng: np.random.Generator) -> np.ndarray | None:
+    """Mask of the points on or below the largest plane, if it is large enough to be the platform.
+
+    "Below" is the side away from the scanner (the origin of S): nothing seen there can be an
+    object standing on the platform."""
+    sample = points[rng.choice(len(points), min(len(points), PLANE_SAMPLE_POINTS), replace=False)]
+    band = PLATFORM_BAND_MM + 2 * spacing
+    triples = sample[rng.integers(0, len(sample), (PLANE_RANSAC_TRIALS, 3))]
+    normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
+    length = np.linalg.norm(normals, axis=1)
+    keep = length > 1e-9
+    normals, triples = normals[keep] / length[keep, None], triples[keep]
+    offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
+    counts = (np.abs(sample @ normals.T - offsets) < band).sum(axis=0)
+    best = int(np.argmax(counts))
+    if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
+        return None
+    inliers = sample[np.abs(sample @ normals[best] - offsets[best]) < band]
+    centre = inliers.mean(axis=0)
+    normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]
+    if normal @ (-centre) < 0:  # make the normal point towards the scanner
+        normal = -normal
+    height = (points - centre) @ normal
+    return height < band
+
+
+def _clusters(points: np.ndarray, link: float) -> np.ndarray:
+    """Connected components of points closer than ``link`` (computed on a link/2 voxel grid)."""
+    if len(points) == 0:
+        return np.empty(0, dtype=np.int64)
+    voxel = link / 2
+    keys = pointops.voxel_keys(points, voxel)
+    cells, inverse = np.unique(keys, return_inverse=True)
+    centres = np.zeros((len(cells), 3))
+    np.add.at(centres, inverse, points)
+    centres /= np.bincount(inverse)[:, None]
+    pairs = cKDTree(centres).query_pairs(link, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(cells), len(cells)))
+    _, cell_labels = connected_components(graph, directed=False)
+    return cell_labels[inverse]
+
+
+def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
+    """Clusters that could be the model by size, most alike first."""
+    if len(idx) == 0:
+        return []
+    out = []
+    for label in np.unique(labels):
+        members = idx[labels == label]
+        if len(members) < MIN_CLUSTER_POINTS:
+            continue
+        ratio = Cloud(points[members]).diagonal() / surface.diagonal
+        if SIZE_RATIO_RANGE[0] <= ratio <= SIZE_RATIO_RANGE[1]:
+            out.append((abs(np.log(ratio)), -len(members), members))
+    return [members for *_, members in sorted(out, key=lambda item: item[:2])]
+
+
+def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str):
+    """Match the model against its candidate clusters in turn; the first trustworthy match wins."""
+    fallback = None
+    for members in _candidates(points, idx, labels, surface):
+        result = match(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, **options)
+        if result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role]:
+            continue
+        if result.ok:
+            return result
+        if result.status != FAILED and fallback is None:
+            fallback = result
+    return fallback
+
+
+def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
+    """Which scan points lie within ``distance`` of the model placed by U."""
+    _, _, found = surface.nearest(frames.apply(frames.invert(U), points), distance)
+    return found
