@@ -8,6 +8,8 @@ from workcal_wb.core import frames
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.simulate.scanner import scanner_ring
 from workcal_wb.core.simulate.scene import build_scene
+from workcal_wb.core.simulate.toolpath_sample import sample_toolpath_points
+from workcal_wb.core.toolpath import read_gcode
 
 
 def test_simulate_writes_scans_models_and_truth(tmp_path, capsys):
@@ -16,8 +18,8 @@ def test_simulate_writes_scans_models_and_truth(tmp_path, capsys):
                  "--noise", "0.05", "--lump"]) == EXIT_OK
     printed = capsys.readouterr().out
     assert "W = ^B X" in printed and "Omega" in printed and "scan_2.ply" in printed
-    assert sorted(p.name for p in out.iterdir()) == ["reference.ply", "scan_1.ply", "scan_2.ply", "truth.json",
-                                                      "workpiece.ply"]
+    assert sorted(p.name for p in out.iterdir()) == ["reference.ply", "scan_1.ply", "scan_2.ply", "toolpath.nc",
+                                                      "truth.json", "workpiece.ply"]
     truth = json.loads((out / "truth.json").read_text())
     scene = build_scene("figurine", seed=3, clay_change=["lump"])
     assert np.allclose(truth["W"], scene.W) and truth["clay_change"]["vertices"] > 0
@@ -35,6 +37,8 @@ def test_simulate_writes_scans_models_and_truth(tmp_path, capsys):
     assert workpiece.is_mesh and np.allclose(workpiece.points, scene.workpiece_model().points)
     assert np.array_equal(workpiece.triangles, scene.workpiece_model().triangles)
     assert reference.is_mesh and np.allclose(reference.points, scene.reference_model().points)
+    toolpath = read_gcode(out / "toolpath.nc")
+    assert np.allclose(toolpath.points()[1:-1], sample_toolpath_points(scene)[0], atol=1e-4)
 
 
 def test_simulate_single_position_and_bad_input(tmp_path, capsys):
