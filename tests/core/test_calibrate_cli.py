@@ -40,12 +40,13 @@ def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path
 
 def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):
     folder, _ = scene_files
-    # Both "regions" are a patch of bare platform in front of the objects: nothing to fix a pose on.
-    box = ["-1000", "-1000", "-1000", "1000", "1000", "1000"]
+    # The workpiece "region" is the first image rows: bare platform, nothing to fix a pose on.
+    box = ["-10000", "-10000", "0", "10000", "10000", "10000"]  # the reference region: the whole scan
     code = main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"), "--workpiece-indices",
                       str(_indices(tmp_path, range(0, 3000))), "--reference-box", *box))
     assert code == 1
-    assert json.loads((tmp_path / "result.json").read_text())["status"] == "failed"
+    result = json.loads((tmp_path / "result.json").read_text())
+    assert result["status"] == "failed" and any("planar" in r for r in result["reasons"]), result["reasons"]
     assert not (tmp_path / "toolpath_calibrated.nc").exists()
 
 

@@ -96,7 +96,9 @@ def run(args) -> int:
     report = write_report(result, out, workpiece_points=workpiece_points, workpiece_model=workpiece)
     print(summary(result))
     print(f"wrote {out / 'result.json'}, {report['html']}")
-    if toolpath is not None:
+    if toolpath is not None and result.W is None:
+        print("workcal calibrate: toolpath not written: the calibration found no W", file=sys.stderr)
+    elif toolpath is not None:
         program = out / f"toolpath_calibrated{FORMATS[args.format].EXTENSION}"
         try:
             export(toolpath, result, args.format, program, force=args.force, calibration_source=str(out / "result.json"))
