@@ -16,8 +16,8 @@ import numpy as np
 from . import frames
 from .errors import InputError
 from .geometry import Cloud
-from .match import match
-from .regions import MIN_WITHIN_TOLERANCE_PCT, locate
+from .match import MatchOptions, match
+from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -29,7 +29,6 @@ class CalibrationOptions:
     tolerance_mm: float = 0.3  # the paper's milling need: residuals and toolpath uncertainty must stay within it
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
-    resample_points: int = 4000
     seed: int = 0
 
 
@@ -78,9 +77,11 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
         source = "user"
         report(0.1, "matching the reference region")
-        V_match = match(_region_cloud(scan, region_idx["reference"], "reference"), reference_surface, **match_options)
+        V_match = match_trusted(_region_cloud(scan, region_idx["reference"], "reference"), reference_surface,
+                                match_options, "reference")
         report(0.35, "matching the workpiece region")
-        U_match = match(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface, **match_options)
+        U_match = match_trusted(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface,
+                                match_options, "workpiece")
 
     result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
                   inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
@@ -177,41 +178,55 @@ def _inputs(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toolp
 def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, match_options) -> dict:
     """Displacement bound of W at the toolpath and at the workpiece surface, from bootstrap refits.
 
-    Each refit draws the points of both regions with replacement and refines both poses; the spread
-    of the resulting W is what the data supports.  Refits use a subset, so their spread is scaled to
-    the full regions by sqrt(subset / region size) and then multiplied by UNCERTAINTY_FACTOR.  The
-    studies check the bound against the true error (docs/studies.md).
+    Each refit draws the points of both regions with replacement (as many as the match itself fits
+    to) and refines both poses from a start nudged off the solution (half the tolerance at the model's
+    edge): where the data pins a pose the refit comes back; where it leaves a motion nearly free (a
+    block seen on two faces slides along them) the refits stay spread, and so does W.  The bound is
+    UNCERTAINTY_FACTOR times the RMS displacement over the refits.  The studies check it against the
+    true error (docs/studies.md).
     """
     rng = np.random.default_rng(options.seed + 1)
     roles = ("workpiece", "reference")
     sizes = {role: len(regions[role]) for role in roles}
-    n = {role: min(sizes[role], options.resample_points) for role in roles}
+    n = {role: min(sizes[role], MatchOptions.max_fine_points) for role in roles}
     workpiece_surface = surfaces[0]
     surface_points = workpiece_surface.points[
         rng.choice(len(workpiece_surface.points), min(SURFACE_SAMPLES, len(workpiece_surface.points)), replace=False)]
     targets = {"surface": surface_points}
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
-    squared = {k: np.zeros(len(p)) for k, p in targets.items()}
+    spread = {k: np.zeros(len(p)) for k, p in targets.items()}
     rotations = []
     for _ in range(options.resamples):
         refit = []
         for role, surface, pose in zip(roles, surfaces, poses):
             draw = rng.choice(regions[role], n[role], replace=True)
-            refit.append(match(scan.subset(draw, name=f"{role} resample"), surface, init=pose, **match_options).matrix)
+            start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
+            refit.append(match(scan.subset(draw, name=f"{role} resample"), surface, init=start, **match_options).matrix)
         W_r = frames.invert(refit[1]) @ refit[0]
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():
-            squared[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
-    scale = max(np.sqrt(n[r] / sizes[r]) for r in roles)
+            spread[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
     out = {"method": f"bootstrap: {options.resamples} refits of both matches on {n['workpiece']} + {n['reference']} "
-                     f"resampled points, RMS spread scaled by sqrt(subset/region) x {UNCERTAINTY_FACTOR:g}",
-           "rotation_bound_deg": float(UNCERTAINTY_FACTOR * scale * np.sqrt(np.mean(np.square(rotations))))}
-    for key, total in squared.items():
-        per_point = UNCERTAINTY_FACTOR * scale * np.sqrt(total / options.resamples)
+                     f"resampled points from nudged starts, {UNCERTAINTY_FACTOR:g} x RMS displacement",
+           "rotation_bound_deg": float(UNCERTAINTY_FACTOR * np.sqrt(np.mean(np.square(rotations))))}
+    for key, total in spread.items():
+        per_point = UNCERTAINTY_FACTOR * np.sqrt(total / options.resamples)
         out[f"{key}_bound_mm"] = float(per_point.max())
         out[f"{key}_median_mm"] = float(np.median(per_point))
     return out
+
+
+def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> np.ndarray:
+    """A random rigid motion (model frame) moving the model's points by about ``size_mm``: a turn
+    about its centre that moves its edge by that much, and a shift of that size."""
+    centre = surface.points.mean(axis=0)
+    axis = rng.normal(size=3)
+    angle = np.degrees(size_mm / (surface.diagonal / 2))
+    turn = frames.rigid(frames.from_rotvec(np.radians(angle) * axis / np.linalg.norm(axis))[:3, :3])
+    shift = rng.normal(size=3)
+    return frames.rigid(translation=centre + size_mm * shift / np.linalg.norm(shift)) @ turn @ frames.rigid(
+        translation=-centre)
 
 
 def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float) -> list:
@@ -223,6 +238,8 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
         share = MIN_WITHIN_TOLERANCE_PCT[role]
         gates.append({"name": f"{role} points within tolerance", "value": m.within_tolerance_pct, "limit": share,
                       "passed": bool(m.within_tolerance_pct >= share), "unit": "%"})
+        gates.append({"name": f"{role} region explained by its model", "value": 100 * m.fitness,
+                      "limit": 100 * MIN_FITNESS[role], "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%"})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
     value = uncertainty[key]

@@ -32,13 +32,20 @@ LINK_SPACINGS = 4.0
 # A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
 SIZE_RATIO_RANGE = (0.15, 1.5)
 MIN_CLUSTER_POINTS = 100
-# A cluster belongs to the workpiece when this fraction of it lies near the placed workpiece model
-# (lumps of clay added later are connected to it and come along).
-WORKPIECE_CLUSTER_SHARE = 0.5
-# A match only locates an object when most matched points lie within the tolerance: the reference is
-# rigid and unchanged; the workpiece may have had clay added or carved.  A wrong object placed
-# "as well as it goes" scores far lower (measured 10-30 % for an ellipsoid or the L-block on a car).
+# A cluster belongs to an object when this fraction of it lies near the placed model (lumps of clay
+# added later are connected to the workpiece and come along).  Below TOUCHING_SHARE of the object's
+# clusters near its model, it touches something else and only its near points are kept.
+CLUSTER_SHARE = 0.5
+TOUCHING_SHARE = 0.9
+# A match only locates an object when most matched points lie within the tolerance and most of the
+# candidate is explained: the reference is rigid and unchanged, the workpiece may have had clay added
+# or carved.  A wrong model placed "as well as it goes" scores far lower (measured: 10-30 % within
+# tolerance for an ellipsoid or the L-block on a car; fitness 0.36-0.86 for flipped L-block poses).
 MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": 50.0}
+MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
+# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
+SEARCH_ATTEMPTS = 3
+GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
 
 
 @dataclass
@@ -89,21 +96,37 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     if reference_match is None:
         raise InputError(f"reference object {reference.name}: not found in {scan.name} (no object standing on the "
                          "platform matches its model); is the reference in view, and is its model the right one?")
-    near_reference = _near(points[objects], reference, reference_match.matrix, max(2.0, 3 * spacing))
-    reference_idx = objects[near_reference]
+    on_reference = _on_model(points[objects], labels, reference, reference_match.matrix, max(2.0, 3 * spacing))
+    if on_reference.touching:
+        warnings.append(f"{scan.name}: the reference touches another object; its region is only the points "
+                        "near its model")
+    reference_idx = objects[on_reference.region]
 
     report(0.3, f"looking for the workpiece {workpiece.name}")
-    rest, rest_labels = objects[~near_reference], labels[~near_reference]
+    rest, rest_labels = objects[~on_reference.region], labels[~on_reference.region]
     workpiece_match = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
     if workpiece_match is None:
         raise InputError(f"workpiece {workpiece.name}: not found in {scan.name}: no object left after removing the "
                          f"platform and the reference matches its model (objects tried: "
                          f"{len(_candidates(points, rest, rest_labels, workpiece))})")
-    on_model = _near(points[rest], workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
-    share = np.bincount(rest_labels, weights=on_model, minlength=rest_labels.max() + 1) / np.maximum(
-        np.bincount(rest_labels, minlength=rest_labels.max() + 1), 1)
-    workpiece_idx = rest[share[rest_labels] >= WORKPIECE_CLUSTER_SHARE]
+    # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
+    on_workpiece = _on_model(points[rest], rest_labels, workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
+    workpiece_idx = rest[on_workpiece.clusters]
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings)
+
+
+def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str) -> MatchResult:
+    """Match, and when the pose does not explain the region, search again with other seeds and keep
+    the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
+    nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers."""
+    best = None
+    for attempt in range(SEARCH_ATTEMPTS):
+        result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
+        if best is None or (result.status != FAILED, result.fitness) > (best.status != FAILED, best.fitness):
+            best = result
+        if best.ok and best.fitness >= GOOD_FITNESS[role]:
+            break
+    return best
 
 
 def _platform(points: np.ndarray, spacing: float, rng: np.random.Generator) -> np.ndarray | None:
@@ -167,14 +190,31 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     """Match the model against its candidate clusters in turn; the first trustworthy match wins."""
     fallback = None
     for members in _candidates(points, idx, labels, surface):
-        result = match(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, **options)
-        if result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role]:
+        result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
+        if result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]:
             continue
         if result.ok:
             return result
         if result.status != FAILED and fallback is None:
             fallback = result
     return fallback
+
+
+@dataclass
+class _OnModel:
+    clusters: np.ndarray  # points of the clusters that lie mostly on the placed model
+    region: np.ndarray  # those clusters, or only their points near the model when they hold other things too
+    touching: bool
+
+
+def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> _OnModel:
+    """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful)."""
+    near = _near(points, surface, U, distance)
+    counts = np.bincount(labels, minlength=labels.max() + 1)
+    share = np.bincount(labels, weights=near, minlength=len(counts)) / np.maximum(counts, 1)
+    clusters = share[labels] >= CLUSTER_SHARE
+    touching = clusters.any() and near[clusters].mean() < TOUCHING_SHARE
+    return _OnModel(clusters, clusters & near if touching else clusters, bool(touching))
 
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
