@@ -25,7 +25,7 @@ test: test-headless test-gui
 
 test-headless: setup
 	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
-	sys.exit(pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()))"
+	rc = pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()); sys.stdout.flush(); sys.exit(rc)"
 
 test-gui: setup
 	$(FREECAD_ENV) $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py

@@ -10,6 +10,7 @@ __version__ = "0.1.0"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESOURCES = os.path.join(ROOT, "resources")
 ICONS = os.path.join(RESOURCES, "icons")
+TRANSLATIONS = os.path.join(RESOURCES, "translations")
 
 
 def icon(name: str) -> str:

@@ -1,0 +1,184 @@
+"""The calibration report: self-contained HTML, JSON with the calibration's numbers, a deviation map
+that shows clay changes where they are, and atomic writing."""
+import base64
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+from workcal_wb.core import atomic, frames
+from workcal_wb.core.calibration import CalibrationOptions, calibrate
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.report import deviation_map, write_report, write_study_report
+from workcal_wb.core.result import FAILED, CalibrationResult
+from workcal_wb.core.simulate.scanner import Scanner
+from workcal_wb.core.simulate.scene import build_scene
+from workcal_wb.core.studies.common import StudyResult, new_figure, save_figure
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def lumpy():
+    """A car with a clay lump and a carved patch added after its model was made, calibrated."""
+    scene = build_scene("car", seed=2, clay_change=["lump", "carve"])
+    scan = Scanner.aimed_at(scene, seed=2, image_size=(368, 276)).scan(scene)
+    regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions,
+                       options=CalibrationOptions(resamples=2, resample_points=2000))
+    assert result.W is not None, result.reasons
+    return scene, scan, result
+
+
+@pytest.fixture(scope="module")
+def written(lumpy, tmp_path_factory):
+    scene, scan, result = lumpy
+    out = tmp_path_factory.mktemp("report")
+    paths = write_report(result, out, workpiece_points=scan.points[scan.mask("workpiece")],
+                         workpiece_model=scene.workpiece_model(), title="Lump <test> & report")
+    return paths, paths["html"].read_text(encoding="utf-8"), json.loads(paths["json"].read_text(encoding="utf-8"))
+
+
+def test_report_files_are_written_and_self_contained(written):
+    paths, page, _ = written
+    assert set(paths) == {"html", "json"} and all(p.is_file() for p in paths.values())
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    assert "http://" not in page and "https://" not in page and "<link" not in page and "<script" not in page
+    sources = re.findall(r'src="([^"]*)"', page)
+    assert len(sources) >= 2  # the deviation map and its histogram
+    for src in sources:
+        assert src.startswith("data:image/png;base64,")
+        assert base64.b64decode(src.split(",", 1)[1])[:8] == PNG
+    assert "Lump &lt;test&gt; &amp; report" in page  # text is escaped, not injected
+
+
+def _same(a, b):
+    """Equal as JSON values, NaN equal to NaN."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and math.isnan(a):
+        return isinstance(b, float) and math.isnan(b)
+    return a == b
+
+
+def test_report_json_holds_the_calibration_numbers(written, lumpy):
+    _, _, data = written
+    result = lumpy[2]
+    expected = json.loads(json.dumps(result.to_dict(), allow_nan=True))
+    for key, value in expected.items():
+        assert _same(data[key], value), key
+    back = CalibrationResult.from_dict(data)  # report.json is also a calibration file
+    assert np.array_equal(back.W, result.W) and back.status == result.status
+    assert data["report"]["format"] == "workcal-report"
+    deviation = data["deviation"]
+    assert deviation["n_points"] + deviation["n_far"] == int(lumpy[1].mask("workpiece").sum())
+    assert sum(deviation["histogram"]["counts"]) == deviation["n_points"]
+
+
+def test_html_shows_status_matrices_and_residuals(written, lumpy):
+    _, page, _ = written
+    result = lumpy[2]
+    assert re.search(rf'class="banner {result.status}"', page)
+    for name in ("W", "U", "V"):
+        for value in getattr(result, name).ravel():
+            assert f"<td>{value:.6f}</td>" in page, (name, value)
+    phi, theta, psi = frames.euler_zyz(result.W)
+    assert f"{phi:.4f}, {theta:.4f}, {psi:.4f} deg" in page and f"{frames.omega(result.W):.4f} deg" in page
+    assert f"{result.workpiece.rms_mm:.4f}" in page and f"{result.reference.rms_mm:.4f}" in page
+    for gate in result.quality_gates:
+        assert gate["name"] in page
+    assert f"{result.uncertainty['surface_bound_mm']:.4f}" in page
+
+
+def test_deviation_map_shows_the_lump_and_the_carving(lumpy):
+    scene, scan, result = lumpy
+    points = scan.points[scan.mask("workpiece")]
+    deviations = deviation_map(result, points, scene.workpiece_model())
+    reshaped = scene.reshaped
+    mesh = scene.workpiece.mesh  # the clay as scanned, in X
+    for pick, sign in ((np.argmax, 1.0), (np.argmin, -1.0)):
+        apex = mesh.points[pick(reshaped.displacement_mm)]
+        height = abs(reshaped.displacement_mm).max() if sign > 0 else -reshaped.displacement_mm.min()
+        near = np.linalg.norm(points - frames.apply(scan.U, apex[None])[0], axis=1) < 3.0
+        assert near.sum() > 10
+        assert np.all(sign * deviations[near] > 0.6 * height), (sign, height, deviations[near].min())
+    changed = mesh.points[reshaped.changed]
+    in_X = frames.apply(frames.invert(scan.U), points)
+    untouched = np.min(np.linalg.norm(in_X[:, None, :] - changed[None, ::25, :], axis=2), axis=1) > 10.0
+    assert np.nanmedian(np.abs(deviations[untouched])) < 0.1
+    assert np.nanpercentile(np.abs(deviations[untouched]), 95) < result.tolerance_mm
+
+
+def test_report_json_deviation_statistics_show_the_lump(written, lumpy):
+    _, _, data = written
+    lump_height = lumpy[0].reshaped.displacement_mm.max()
+    assert data["deviation"]["max_mm"] > 0.6 * lump_height
+    assert data["deviation"]["above_tolerance_pct"] > 0 and data["deviation"]["below_tolerance_pct"] > 0
+
+
+def _failing_fsync(calls_before_failure):
+    calls = []
+    real = atomic.os.fsync
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) > calls_before_failure:
+            raise OSError(28, "No space left on device")
+        return real(fd)
+    return fsync
+
+
+@pytest.mark.parametrize("calls_before_failure", [0, 1])  # failing while writing report.json / report.html
+def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, calls_before_failure):
+    result = lumpy[2]
+    monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(calls_before_failure))
+    with pytest.raises(InputError, match="cannot write the report.*No space left"):
+        write_report(result, tmp_path)
+    assert not (tmp_path / "report.html").exists()
+    assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".*.part"))
+
+
+def test_a_failed_rewrite_keeps_the_previous_report(lumpy, tmp_path, monkeypatch):
+    result = lumpy[2]
+    write_report(result, tmp_path, title="first")
+    before = (tmp_path / "report.html").read_bytes()
+    monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(1))
+    with pytest.raises(InputError):
+        write_report(result, tmp_path, title="second")
+    assert (tmp_path / "report.html").read_bytes() == before
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def test_failed_calibration_report_says_why(tmp_path):
+    failed = CalibrationResult(FAILED, W=None, reasons=["reference match failed: the scan points are planar"],
+                               warnings=["scan: 12 points with NaN"])
+    paths = write_report(failed, tmp_path)
+    page = paths["html"].read_text(encoding="utf-8")
+    assert 'class="banner failed"' in page and "FAILED" in page
+    assert "the scan points are planar" in page and "12 points with NaN" in page
+    assert "not determined" in page and "No deviation map" in page
+    data = json.loads(paths["json"].read_text(encoding="utf-8"))
+    assert data["status"] == "failed" and data["W"] is None and data["deviation"] is None
+
+
+def test_studies_are_embedded_in_the_report(lumpy, tmp_path):
+    fig = new_figure(3, 2)
+    fig.subplots().plot([0, 1], [1, 0])
+    save_figure(fig, tmp_path / "made_up.png")
+    study = StudyResult("made-up", "A made-up study", {"quick": True}, rows=[{"run": 1, "error": 0.5}],
+                        summary={"max_error_mm": 0.5}, targets=[{"name": "error", "value": 0.5, "limit": 0.3,
+                                                                  "unit": "mm", "passed": False,
+                                                                  "comparison": "<="}],
+                        files={"figure": tmp_path / "made_up.png"})
+    figure = base64.b64encode((tmp_path / "made_up.png").read_bytes()).decode("ascii")
+    page = write_report(lumpy[2], tmp_path, studies=[study])["html"].read_text(encoding="utf-8")
+    assert "A made-up study" in page and figure in page and "missed" in page
+    alone = write_study_report([study], tmp_path / "studies")["html"].read_text(encoding="utf-8")
+    assert figure in alone and "http://" not in alone and "https://" not in alone
+    assert 'class="banner' not in alone  # no calibration in a studies page
+    data = json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))
+    assert data["studies"][0]["name"] == "made-up" and data["studies"][0]["passed"] is False

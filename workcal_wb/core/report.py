@@ -1,0 +1,413 @@
+"""The calibration report: one self-contained HTML page and a JSON file with the same numbers.
+
+report.html has inline CSS and its images embedded as base64 PNG (no scripts, no links, nothing
+fetched), so it can be mailed or archived on its own.  report.json is ``CalibrationResult.to_dict()``
+(it loads back with ``CalibrationResult.from_json``) plus the deviation statistics and the studies.
+
+Both are built completely in memory and then written atomically, report.html last: a failure
+leaves the previous report (or none), never half a file.
+
+The deviation map shows the workpiece scan region against its model X-A placed by U: signed
+distance to the model surface, positive outside (clay added), negative inside (clay carved).
+"""
+from __future__ import annotations
+
+import base64
+import datetime
+import html
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from . import frames
+from .atomic import atomic_write_text
+from .deviation import deviation_stats, signed_deviations
+from .errors import InputError
+from .result import AMBIGUOUS, FAILED, OK, CalibrationResult
+
+REPORT_FORMAT = "workcal-report"
+HTML_NAME, JSON_NAME = "report.html", "report.json"
+STUDIES_HTML_NAME = "studies.html"
+PERCENTILES = (50, 90, 95, 99)
+HISTOGRAM_BINS = 60
+# Points drawn in a deviation view (a random subset of larger regions, seeded).
+MAX_MAP_POINTS = 60000
+MAX_OUTLINE_POINTS = 20000
+
+STATUS_TEXT = {
+    OK: ("OK", "W can be used: both matches and every quality gate passed."),
+    AMBIGUOUS: ("AMBIGUOUS", "W is not unique: another pose fits almost as well. Check the candidates before use."),
+    FAILED: ("FAILED", "Do not use W: the calibration failed its checks."),
+}
+
+CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:0 auto;max-width:1100px;
+padding:1.2em;color:#222;line-height:1.4}
+h1{font-size:1.6em;margin:.2em 0}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+h3{font-size:1.05em;margin:1em 0 .4em}
+table{border-collapse:collapse;margin:.4em 0 1em}td,th{border:1px solid #ccc;padding:.25em .6em;text-align:right;
+vertical-align:top}th{background:#f2f2f2}td.l,th.l{text-align:left}
+table.matrix td{font-family:ui-monospace,Menlo,Consolas,monospace;border:none;padding:.1em .7em}
+table.matrix{border-left:2px solid #444;border-right:2px solid #444}
+.banner{padding:.8em 1em;border-radius:6px;margin:1em 0;color:#fff}.banner b{font-size:1.3em}
+.ok{background:#2e7d32}.ambiguous{background:#ef8f00}.failed{background:#c62828}
+.pass{color:#2e7d32;font-weight:bold}.miss{color:#c62828;font-weight:bold}
+.poses{display:flex;flex-wrap:wrap;gap:1.5em}.note{color:#666;font-size:.9em}
+img{max-width:100%;border:1px solid #ddd}code{font-family:ui-monospace,Menlo,Consolas,monospace}
+"""
+
+
+def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=None, workpiece_model=None,
+                 studies=(), title: str = "WorkCal calibration") -> dict:
+    """Write report.html and report.json into ``out_dir`` (created if missing); return their paths.
+
+    workpiece_points: the workpiece region of the scan (N x 3, mm, in S) for the deviation map;
+    workpiece_model: X-A (Cloud or SurfaceModel); studies: StudyResults (or their dicts) whose
+    summaries, targets and figures are added.  Raises InputError if the folder cannot be written.
+    """
+    out = Path(out_dir)
+    deviations = deviation_map(calibration, workpiece_points, workpiece_model)
+    deviation = deviation_summary(deviations, calibration.tolerance_mm) if deviations is not None else None
+    study_dicts = [_study_dict(s) for s in studies]
+    generated = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+
+    data = calibration.to_dict()
+    data["deviation"] = deviation
+    data["studies"] = study_dicts
+    data["report"] = {"format": REPORT_FORMAT, "version": 1, "title": title, "generated": generated,
+                      "files": {"html": HTML_NAME, "json": JSON_NAME}}
+    images = {}
+    if deviations is not None:
+        images["map"] = _png(deviation_figure(deviations, calibration, workpiece_points, workpiece_model))
+        images["histogram"] = _png(histogram_figure(deviations, calibration.tolerance_mm))
+    page = _page(title, generated, _calibration_body(calibration, deviation, images, workpiece_points is not None
+                                                     and workpiece_model is not None)
+                 + _studies_body(studies, study_dicts))
+    paths = {"html": out / HTML_NAME, "json": out / JSON_NAME}
+    _write(out, [(paths["json"], json.dumps(data, indent=2, allow_nan=True) + "\n"), (paths["html"], page)])
+    return paths
+
+
+def write_study_report(studies, out_dir, title: str = "WorkCal studies") -> dict:
+    """A self-contained studies.html with each study's summary, targets and figure."""
+    out = Path(out_dir)
+    study_dicts = [_study_dict(s) for s in studies]
+    generated = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+    path = out / STUDIES_HTML_NAME
+    _write(out, [(path, _page(title, generated, _studies_body(studies, study_dicts)))])
+    return {"html": path}
+
+
+# --- deviation map -----------------------------------------------------------------------------------
+
+def deviation_map(calibration: CalibrationResult, workpiece_points, workpiece_model):
+    """Signed deviation (mm) of each workpiece scan point from X-A placed by U, or None when the
+    report has no scan points, no model, or no U to place it with."""
+    if workpiece_points is None or workpiece_model is None or calibration.U is None:
+        return None
+    points = np.asarray(workpiece_points, dtype=float).reshape(-1, 3)
+    if len(points) == 0:
+        return None
+    return signed_deviations(points, workpiece_model, calibration.U)
+
+
+def deviation_summary(deviations: np.ndarray, tolerance_mm: float) -> dict:
+    """deviation_stats plus percentiles of |deviation|, the shares above and below the tolerance band
+    (added and removed material) and the histogram the report draws."""
+    stats = deviation_stats(deviations, tolerance_mm)
+    d = deviations[np.isfinite(deviations)]
+    if len(d):
+        stats["percentiles_abs_mm"] = {str(q): float(np.percentile(np.abs(d), q)) for q in PERCENTILES}
+        stats["above_tolerance_pct"] = float(100 * np.mean(d > tolerance_mm))
+        stats["below_tolerance_pct"] = float(100 * np.mean(d < -tolerance_mm))
+        counts, edges = np.histogram(d, bins=HISTOGRAM_BINS)
+        stats["histogram"] = {"edges_mm": edges.tolist(), "counts": counts.tolist()}
+    return stats
+
+
+def _colour_limit(deviations: np.ndarray, tolerance: float) -> float:
+    d = np.abs(deviations[np.isfinite(deviations)])
+    return float(max(tolerance, np.percentile(d, 99.5) if len(d) else tolerance))
+
+
+def deviation_figure(deviations, calibration, workpiece_points, workpiece_model):
+    """Two orthographic views of the workpiece in its model frame (along the model's principal axes:
+    seen from above and from the side), scan points coloured by signed deviation, model in grey."""
+    from matplotlib import colors
+
+    from .studies.common import new_figure
+
+    points = frames.apply(frames.invert(calibration.U), np.asarray(workpiece_points, dtype=float).reshape(-1, 3))
+    model_points = getattr(workpiece_model, "points", None)
+    model_points = points if model_points is None else np.asarray(model_points)
+    centre = model_points.mean(axis=0)
+    _, _, axes = np.linalg.svd(model_points - centre, full_matrices=False)  # rows: longest axis first
+    if np.linalg.det(axes) < 0:
+        axes[2] *= -1  # right-handed, so that no view is a mirror image
+    rng = np.random.default_rng(0)
+    keep = np.arange(len(points)) if len(points) <= MAX_MAP_POINTS else rng.choice(len(points), MAX_MAP_POINTS, False)
+    local, d = (points[keep] - centre) @ axes.T, deviations[keep]
+    outline = model_points if len(model_points) <= MAX_OUTLINE_POINTS else \
+        model_points[rng.choice(len(model_points), MAX_OUTLINE_POINTS, False)]
+    outline = (outline - centre) @ axes.T
+    limit = _colour_limit(deviations, calibration.tolerance_mm)
+    norm = colors.TwoSlopeNorm(vmin=-limit, vcenter=0.0, vmax=limit)
+    fig = new_figure(11.0, 4.2)
+    views = fig.subplots(1, 2)
+    mappable = None
+    for ax, (h, v, depth), name in zip(views, ((0, 1, 2), (0, 2, 1)), ("view along the shortest axis",
+                                                                       "view along the middle axis")):
+        # Look from the side the scanner saw (the scan points' side of the part); turning the view
+        # around flips the horizontal axis with the depth, so it stays a view, not a mirror image.
+        side = 1.0 if local[:, depth].mean() >= 0 else -1.0
+        sign = np.ones(3)
+        sign[[h, depth]] = side
+        if (h, v, depth) == (0, 2, 1):  # (x, z) seen along +y is a left-handed view: turn it around
+            sign[h] *= -1
+        seen, model = local * sign, outline * sign
+        ax.scatter(model[:, h], model[:, v], s=1, color="#d0d0d0", linewidths=0)
+        order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
+        far = order[~np.isfinite(d[order])]
+        near = order[np.isfinite(d[order])]
+        ax.scatter(seen[far, h], seen[far, v], s=2, color="#888888", linewidths=0)
+        mappable = ax.scatter(seen[near, h], seen[near, v], c=d[near], cmap="RdBu_r", norm=norm, s=3, linewidths=0)
+        ax.set_aspect("equal")
+        ax.set_title(name)
+        ax.set_xlabel(f"principal axis {h + 1} of X-A (mm)")
+        ax.set_ylabel(f"principal axis {v + 1} of X-A (mm)")
+    bar = fig.colorbar(mappable, ax=list(views), shrink=0.85)
+    bar.set_label("signed deviation (mm): + clay added, - clay removed")
+    return fig
+
+
+def histogram_figure(deviations, tolerance_mm: float):
+    """Histogram of signed deviations (log count), bars coloured like the map, tolerance band marked."""
+    from matplotlib import colormaps, colors
+
+    from .studies.common import new_figure
+
+    d = deviations[np.isfinite(deviations)]
+    fig = new_figure(8.0, 3.6)
+    ax = fig.subplots()
+    if len(d):
+        counts, edges = np.histogram(d, bins=HISTOGRAM_BINS)
+        limit = _colour_limit(deviations, tolerance_mm)
+        norm = colors.TwoSlopeNorm(vmin=-limit, vcenter=0.0, vmax=limit)
+        middles = 0.5 * (edges[1:] + edges[:-1])
+        ax.bar(middles, counts, width=np.diff(edges), color=colormaps["RdBu_r"](norm(middles)), edgecolor="#555",
+               linewidth=0.3)
+        ax.set_yscale("log")
+    for x in (-tolerance_mm, tolerance_mm):
+        ax.axvline(x, color="black", linestyle=":", linewidth=1)
+    ax.set_xlabel(f"signed deviation (mm); dotted: tolerance +/- {tolerance_mm:g} mm")
+    ax.set_ylabel("scan points")
+    return fig
+
+
+# --- HTML ----------------------------------------------------------------------------------------------
+
+def _e(value) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _num(value, digits: int = 4) -> str:
+    """A number as the terminal summaries print it; text escaped."""
+    from .studies.common import fmt
+
+    return _e(value) if isinstance(value, str) else fmt(value, digits)
+
+
+def _table(rows, header=None, left_columns=1) -> str:
+    out = ["<table>"]
+    if header:
+        out.append("<tr>" + "".join(f'<th class="{"l" if i < left_columns else ""}">{_e(h)}</th>'
+                                    for i, h in enumerate(header)) + "</tr>")
+    for row in rows:
+        out.append("<tr>" + "".join(f'<td class="{"l" if i < left_columns else ""}">{cell}</td>'
+                                    for i, cell in enumerate(row)) + "</tr>")
+    return "".join(out) + "</table>"
+
+
+def _matrix_html(T) -> str:
+    return '<table class="matrix">' + "".join(
+        "<tr>" + "".join(f"<td>{v:.6f}</td>" for v in row) + "</tr>" for row in np.asarray(T)) + "</table>"
+
+
+def _pose_html(name: str, meaning: str, T) -> str:
+    if T is None:
+        return f"<div><h3>{_e(name)}</h3><p class='note'>{_e(meaning)}: not determined.</p></div>"
+    phi, theta, psi = frames.euler_zyz(T)
+    t = np.asarray(T)[:3, 3]
+    rows = [["Euler Z-Y-Z (phi, theta, psi)", f"{phi:.4f}, {theta:.4f}, {psi:.4f} deg"],
+            ["Omega (principal-axis rotation)", f"{frames.omega(T):.4f} deg"],
+            ["translation (x, y, z)", f"{t[0]:.4f}, {t[1]:.4f}, {t[2]:.4f} mm"]]
+    return (f"<div><h3>{_e(name)}</h3><p class='note'>{_e(meaning)}</p>{_matrix_html(T)}"
+            + _table([[_e(a), _e(b)] for a, b in rows]) + "</div>")
+
+
+def _banner(calibration: CalibrationResult) -> str:
+    label, text = STATUS_TEXT[calibration.status]
+    reasons = "".join(f"<li>{_e(r)}</li>" for r in calibration.reasons)
+    return (f'<div class="banner {calibration.status}" id="status"><b>{label}</b> &nbsp; {_e(text)}'
+            + (f"<ul>{reasons}</ul>" if reasons else "") + "</div>")
+
+
+def _matches_html(calibration: CalibrationResult) -> str:
+    matches = [("workpiece: U", calibration.workpiece), ("reference: V", calibration.reference)]
+    fields = [
+        ("status", lambda m: _e(m.status)), ("method", lambda m: _e(m.method)),
+        ("scan points", lambda m: _num(m.n_scan_points)), ("inliers", lambda m: _num(m.n_inliers)),
+        ("fitness (points on the model)", lambda m: f"{100 * m.fitness:.1f} %"),
+        ("coverage of the model", lambda m: f"{100 * m.coverage:.1f} %"),
+        ("RMS (mm)", lambda m: _num(m.rms_mm)),
+        ("mean directed Hausdorff (mm)", lambda m: _num(m.mean_directed_hausdorff_mm)),
+        ("max deviation (mm)", lambda m: _num(m.max_deviation_mm)),
+        *[(f"{q}th percentile |deviation| (mm)", lambda m, q=q: _num(m.percentiles_mm.get(str(q))))
+          for q in PERCENTILES],
+        ("within tolerance", lambda m: f"{m.within_tolerance_pct:.1f} % (of inliers, {m.tolerance_mm:g} mm)"),
+        ("final gate (mm)", lambda m: _num(m.gate_mm)), ("iterations", lambda m: _num(m.iterations)),
+        ("time (s)", lambda m: _num(m.time_s, 2)),
+    ]
+    rows = [[_e(label)] + [("-" if m is None else getter(m)) for _, m in matches] for label, getter in fields]
+    return _table(rows, ["", *(name for name, _ in matches)])
+
+
+def _gates_html(calibration: CalibrationResult) -> str:
+    if not calibration.quality_gates:
+        return "<p class='note'>No quality gates were evaluated.</p>"
+    rows = []
+    for g in calibration.quality_gates:
+        value = g["value"] if isinstance(g["value"], str) else _num(g["value"])
+        verdict = '<span class="pass">pass</span>' if g["passed"] else '<span class="miss">FAIL</span>'
+        rows.append([_e(g["name"]), value, _e(g["limit"]), _e(g.get("unit", "")), verdict])
+    return _table(rows, ["gate", "value", "limit", "unit", "result"])
+
+
+def _uncertainty_html(calibration: CalibrationResult) -> str:
+    u = calibration.uncertainty
+    if not u:
+        return "<p class='note'>No uncertainty was estimated (the calibration did not get that far).</p>"
+    labels = [("toolpath_bound_mm", "bound at the toolpath (largest over its points)", "mm"),
+              ("toolpath_median_mm", "median at the toolpath", "mm"),
+              ("surface_bound_mm", "bound at the workpiece surface (largest)", "mm"),
+              ("surface_median_mm", "median at the workpiece surface", "mm"),
+              ("rotation_bound_deg", "rotation bound", "deg")]
+    rows = [[_e(text), _num(u[key]), unit] for key, text, unit in labels if key in u]
+    rows += [[_e(k), _num(v), ""] for k, v in u.items() if k not in {key for key, _, _ in labels} | {"method"}]
+    note = f"<p class='note'>{_e(u['method'])}</p>" if "method" in u else ""
+    return _table(rows, ["", "value", "unit"]) + note
+
+
+def _inputs_html(calibration: CalibrationResult) -> str:
+    rows = [[_e(k), _e(v)] for k, v in calibration.inputs.items()]
+    regions = calibration.regions or {}
+    for role in ("workpiece", "reference", "platform"):
+        if role in regions:
+            rows.append([_e(f"{role} region"), f"{len(regions[role])} scan points"])
+    if "source" in regions:
+        rows.append(["regions from", _e("automatic" if regions["source"] == "auto" else "the user")])
+    rows += [["tolerance", f"{calibration.tolerance_mm:g} mm"], ["seed", _e(calibration.seed)],
+             ["time", f"{calibration.time_s:.2f} s"]]
+    return _table(rows, left_columns=2)
+
+
+def _deviation_html(deviation, images, asked: bool) -> str:
+    if deviation is None:
+        why = ("the calibration found no U to place the model with" if asked
+               else "no workpiece scan points or model were given to the report")
+        return f"<p class='note'>No deviation map: {_e(why)}.</p>"
+    rows = [["points compared", _num(deviation.get("n_points"))],
+            ["points far from the model (not compared)", _num(deviation.get("n_far"))]]
+    if deviation.get("n_points"):
+        rows += [["mean (mm)", _num(deviation["mean_mm"])], ["RMS (mm)", _num(deviation["rms_mm"])],
+                 ["min (mm)", _num(deviation["min_mm"])], ["max (mm)", _num(deviation["max_mm"])],
+                 *[[f"{q}th percentile |deviation| (mm)", _num(v)] for q, v in deviation["percentiles_abs_mm"].items()],
+                 [f"within +/- {deviation['tolerance_mm']:g} mm", f"{deviation['within_tolerance_pct']:.1f} %"],
+                 ["above the tolerance (added)", f"{deviation['above_tolerance_pct']:.2f} %"],
+                 ["below the tolerance (removed)", f"{deviation['below_tolerance_pct']:.2f} %"]]
+    out = ("<p>Signed distance of the workpiece scan points to the model X-A placed by U: red is outside the model "
+           "(clay added since the model was made), blue inside (clay removed), white on the surface.</p>"
+           + _table(rows))
+    if "map" in images:
+        out += f'<img alt="deviation colour map" src="data:image/png;base64,{images["map"]}">'
+    if "histogram" in images:
+        out += f'<img alt="deviation histogram" src="data:image/png;base64,{images["histogram"]}">'
+    return out
+
+
+def _calibration_body(calibration: CalibrationResult, deviation, images, asked: bool) -> str:
+    warnings = "".join(f"<li>{_e(w)}</li>" for w in calibration.warnings) or "<li>none</li>"
+    poses = "".join([
+        _pose_html("W = ^B X", "the workpiece frame X in the robot base frame B (W = V^-1 U): the toolpath "
+                   "goes to the robot as B-m = W X-m", calibration.W),
+        _pose_html("U = ^S X", "the workpiece model frame in the scanner frame (workpiece match)", calibration.U),
+        _pose_html("V = ^S B", "the robot base frame in the scanner frame (reference match)", calibration.V),
+    ])
+    return (_banner(calibration)
+            + f"<h2>Transformations</h2><div class='poses'>{poses}</div>"
+            + "<p class='note'>Lengths in mm, angles in degrees; matrices act on column vectors (p_B = W p_X). "
+              "The paper's Table 1 prints the inverse of W (U^-1 V), which has the same Omega.</p>"
+            + "<h2>Residuals of the matches</h2>" + _matches_html(calibration)
+            + "<h2>Quality gates</h2>" + _gates_html(calibration)
+            + "<h2>Uncertainty</h2>" + _uncertainty_html(calibration)
+            + "<h2>Deviation of the workpiece from its model</h2>" + _deviation_html(deviation, images, asked)
+            + f"<h2>Warnings</h2><ul>{warnings}</ul>"
+            + "<h2>Inputs</h2>" + _inputs_html(calibration))
+
+
+def _study_dict(study) -> dict:
+    return study.to_dict() if hasattr(study, "to_dict") else dict(study)
+
+
+def _study_figure(study) -> str | None:
+    files = getattr(study, "files", None) or (study.get("files") if isinstance(study, dict) else None) or {}
+    path = files.get("figure")
+    if path is None or not Path(path).is_file():
+        return None
+    return base64.b64encode(Path(path).read_bytes()).decode("ascii")
+
+
+def _studies_body(studies, study_dicts) -> str:
+    if not study_dicts:
+        return ""
+    out = ["<h2>Studies</h2>"]
+    for study, data in zip(studies, study_dicts):
+        out.append(f"<h3>{_e(data.get('title', data.get('name', 'study')))}</h3>")
+        summary = [[_e(k), _num(v)] for k, v in data.get("summary", {}).items() if not isinstance(v, (dict, list))]
+        out.append(_table(summary))
+        targets = data.get("targets", [])
+        if targets:
+            out.append(_table([[_e(t["name"]), _num(t["value"]), f"{_e(t['comparison'])} {_e(t['limit'])}",
+                                _e(t["unit"]), '<span class="pass">met</span>' if t["passed"]
+                                else '<span class="miss">missed</span>'] for t in targets],
+                              ["target", "value", "limit", "unit", "result"]))
+        figure = _study_figure(study)
+        if figure:
+            out.append(f'<img alt="{_e(data.get("name", "study"))} figure" src="data:image/png;base64,{figure}">')
+        settings = ", ".join(f"{k} = {v}" for k, v in data.get("settings", {}).items() if not isinstance(v, dict))
+        out.append(f"<p class='note'>Settings: {_e(settings)}</p>")
+    return "".join(out)
+
+
+def _page(title: str, generated: str, body: str) -> str:
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
+            f"<style>{CSS}</style></head><body><h1>{_e(title)}</h1>"
+            f"<p class='note'>Written {_e(generated)} by WorkCal.</p>{body}</body></html>\n")
+
+
+def _png(figure) -> str:
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", metadata={"Software": None})
+    return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def _write(out: Path, files) -> None:
+    """Each file atomically, in order (the HTML last, so its presence means the report is complete)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for path, text in files:
+            atomic_write_text(path, text)
+    except OSError as exc:
+        raise InputError(f"{out}: cannot write the report ({exc.strerror or exc})") from exc
