@@ -27,7 +27,7 @@ def lumpy():
     scan = Scanner.aimed_at(scene, seed=2, image_size=(368, 276)).scan(scene)
     regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
     result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions,
-                       options=CalibrationOptions(resamples=2, resample_points=2000))
+                       options=CalibrationOptions(resamples=2))
     assert result.W is not None, result.reasons
     return scene, scan, result
 

@@ -3,8 +3,15 @@ import FreeCAD
 import FreeCADGui
 
 import workcal_wb
+from workcal_wb.fc import init as fc_init
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
+
+# Objects the FreeCAD layer creates get these view providers (imported only when one is attached).
+fc_init.VIEW_PROVIDERS.update({
+    "Scan": "workcal_wb.gui.view_providers:ViewProviderScan",
+    "Setup": "workcal_wb.gui.view_providers:ViewProviderSetup",
+})
 
 
 class WorkCalWorkbench(FreeCADGui.Workbench):

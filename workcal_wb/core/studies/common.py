@@ -30,7 +30,7 @@ REGION_MODES = ("truth", "auto")
 # Quick mode (tests, smoke runs): a smaller image of the same scene (~90k points instead of ~200k)
 # and a lighter bootstrap.  Full mode is the paper's scanner image and the calibration defaults.
 QUICK_IMAGE = (368, 276)
-QUICK_RESAMPLES, QUICK_RESAMPLE_POINTS = 2, 2000
+QUICK_RESAMPLES = 2
 # Points on the model surface where the displacement of W is measured (the "surface" error).
 SURFACE_SAMPLES = 2000
 # The targets of issue 4, for simulated scenes (0.1 mm noise, 25 cm part, 5 scanner positions).
@@ -59,7 +59,7 @@ class StudySettings:
             raise InputError(f"study regions must be one of {REGION_MODES}, not {self.regions!r}")
 
     def options(self, seed: int) -> CalibrationOptions:
-        extra = dict(resamples=QUICK_RESAMPLES, resample_points=QUICK_RESAMPLE_POINTS) if self.quick else {}
+        extra = dict(resamples=QUICK_RESAMPLES) if self.quick else {}
         return CalibrationOptions(tolerance_mm=self.tolerance_mm, method=self.method, seed=seed, **extra)
 
     def scanner_settings(self) -> dict:

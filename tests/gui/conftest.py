@@ -1,0 +1,217 @@
+"""Shared fixtures for the GUI tests (run inside FreeCAD by tests/gui/run_gui_tests.py under Xvfb).
+
+* ``workbench``: the WorkCal workbench, activated (session).
+* ``doc``: a fresh document with its 3D view, active; closed afterwards with any task dialog left open.
+* ``shoot(name)``: save the active 3D view as ``<output_dir>/<name>.png`` and return the path.
+* ``report``: the Report view; ``report.mark()`` then ``report.since()`` gives what was printed after.
+* ``view_driver``: synthetic mouse and key events sent through the real 3D view (Coin pixel positions).
+* ``pump(seconds)``: run the event loop for a while.
+Message boxes are off (``task_panels.common.INTERACTIVE = False``) so no modal dialog blocks a test;
+messages still reach the Report view, which is where tests read them.
+"""
+import time
+from pathlib import Path
+
+import pytest
+
+FreeCAD = pytest.importorskip("FreeCAD")
+if not FreeCAD.GuiUp:  # pragma: no cover - these tests need the GUI
+    collect_ignore_glob = ["test_*.py"]
+else:
+    import FreeCADGui
+
+    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+
+SHOT_SIZE = (1000, 750)
+
+
+def pump(seconds: float = 0.05) -> None:
+    """Process events for ``seconds`` (at least once)."""
+    app = QtWidgets.QApplication.instance()
+    end = time.monotonic() + seconds
+    while True:
+        app.processEvents(QtCore.QEventLoop.AllEvents, 20)
+        if time.monotonic() >= end:
+            break
+        time.sleep(0.005)
+
+
+@pytest.fixture(name="pump")
+def pump_fixture():
+    return pump
+
+
+@pytest.fixture(autouse=True)
+def non_interactive():
+    from workcal_wb.gui.task_panels import common
+
+    before = common.INTERACTIVE
+    common.INTERACTIVE = False
+    yield
+    common.INTERACTIVE = before
+
+
+LOAD_LOG = {}  # the Report view after start-up and the workbench's first activation, before any test
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Activate WorkCal once before the first test, so its load messages are not mixed with tests'."""
+    if not FreeCAD.GuiUp or "text" in LOAD_LOG:
+        return
+    LOAD_LOG["activated"] = FreeCADGui.activateWorkbench("WorkCalWorkbench") if \
+        "WorkCalWorkbench" in FreeCADGui.listWorkbenches() else False
+    pump(0.1)
+    LOAD_LOG["text"] = Report().text()
+
+
+@pytest.fixture(scope="session")
+def workbench():
+    FreeCADGui.activateWorkbench("WorkCalWorkbench")  # False when it is active already
+    pump(0.1)
+    assert FreeCADGui.activeWorkbench().name() == "WorkCalWorkbench"
+    LOAD_LOG.setdefault("text", Report().text())
+    return FreeCADGui.activeWorkbench()
+
+
+@pytest.fixture
+def load_log(workbench) -> str:
+    """The Report view text at the first activation of the workbench by these fixtures."""
+    return LOAD_LOG["text"]
+
+
+def close_task_dialog() -> None:
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+        pump(0.05)
+
+
+@pytest.fixture
+def doc(workbench, request):
+    """A new, active document with a 3D view; closed (with any open task panel) after the test."""
+    close_task_dialog()
+    before = set(FreeCAD.listDocuments())
+    name = "T_" + "".join(c if c.isalnum() else "_" for c in request.node.name)[:40]
+    document = FreeCAD.newDocument(name)
+    FreeCAD.setActiveDocument(document.Name)
+    FreeCADGui.activeDocument()  # the view exists once the new document was shown
+    pump(0.1)
+    yield document
+    close_task_dialog()
+    FreeCADGui.Selection.clearSelection()
+    for left in set(FreeCAD.listDocuments()) - before:
+        FreeCAD.closeDocument(left)
+    pump(0.05)
+
+
+def active_view():
+    view = FreeCADGui.ActiveDocument.ActiveView
+    assert hasattr(view, "saveImage"), "the active view is not a 3D view"
+    return view
+
+
+@pytest.fixture
+def shoot(output_dir):
+    """``shoot("name")`` saves the active 3D view to <output_dir>/name.png (asserted non-trivial)."""
+
+    def save(name: str, fit: bool = False) -> Path:
+        view = active_view()
+        if fit:
+            view.fitAll()
+        pump(0.05)
+        path = Path(output_dir) / f"{name}.png"
+        view.saveImage(str(path), SHOT_SIZE[0], SHOT_SIZE[1], "White")
+        assert path.is_file() and path.stat().st_size > 2000, f"screenshot {path} not written"
+        return path
+
+    return save
+
+
+class Report:
+    """The Report view's text (where FreeCAD.Console messages go)."""
+
+    def __init__(self):
+        widget = FreeCADGui.getMainWindow().findChild(QtWidgets.QTextEdit, "Report view")
+        assert widget is not None, "no Report view in the main window"
+        self.widget = widget
+        self._mark = 0
+
+    def text(self) -> str:
+        pump(0.02)
+        return self.widget.toPlainText()
+
+    def mark(self) -> None:
+        self._mark = len(self.text())
+
+    def since(self) -> str:
+        return self.text()[self._mark:]
+
+
+@pytest.fixture
+def report():
+    found = Report()
+    found.mark()
+    return found
+
+
+class ViewDriver:
+    """Mouse and key events sent to the 3D view's viewport, as a user's would arrive.
+
+    Positions are Coin pixels (origin bottom-left, ``view.getSize()``); they are converted to the
+    viewport's Qt coordinates, which FreeCAD maps back (±1 px)."""
+
+    def __init__(self, view):
+        self.view = view
+        self.viewport = view.graphicsView().viewport()
+
+    def to_qt(self, x, y):
+        width, height = self.view.getSize()
+        return QtCore.QPointF(x * self.viewport.width() / width, (height - y) * self.viewport.height() / height)
+
+    def _mouse(self, kind, x, y, button=None, modifiers=None):
+        button = button or QtCore.Qt.LeftButton
+        modifiers = modifiers or QtCore.Qt.NoModifier
+        pos = self.to_qt(x, y)
+        held = QtCore.Qt.NoButton if kind == QtCore.QEvent.MouseButtonRelease else button
+        if kind == QtCore.QEvent.MouseMove:
+            button = QtCore.Qt.NoButton
+        event = QtGui.QMouseEvent(kind, pos, QtCore.QPointF(self.viewport.mapToGlobal(pos.toPoint())),
+                                  button, held, modifiers)
+        QtWidgets.QApplication.sendEvent(self.viewport, event)
+        pump(0.01)
+
+    def press(self, x, y, button=None, modifiers=None):
+        self._mouse(QtCore.QEvent.MouseButtonPress, x, y, button, modifiers)
+
+    def release(self, x, y, button=None, modifiers=None):
+        self._mouse(QtCore.QEvent.MouseButtonRelease, x, y, button, modifiers)
+
+    def move(self, x, y, modifiers=None, held=None):
+        event_button = held or QtCore.Qt.NoButton
+        pos = self.to_qt(x, y)
+        global_pos = QtCore.QPointF(self.viewport.mapToGlobal(pos.toPoint()))
+        event = QtGui.QMouseEvent(QtCore.QEvent.MouseMove, pos, global_pos, QtCore.Qt.NoButton, event_button,
+                                  modifiers or QtCore.Qt.NoModifier)
+        QtWidgets.QApplication.sendEvent(self.viewport, event)
+        pump(0.01)
+
+    def click(self, x, y, button=None, modifiers=None):
+        self.press(x, y, button, modifiers)
+        self.release(x, y, button, modifiers)
+
+    def drag(self, start, end, modifiers=None, steps=4):
+        self.press(*start, modifiers=modifiers)
+        for i in range(1, steps + 1):
+            self.move(start[0] + (end[0] - start[0]) * i / steps, start[1] + (end[1] - start[1]) * i / steps,
+                      modifiers, held=QtCore.Qt.LeftButton)
+        self.release(*end, modifiers=modifiers)
+
+    def key(self, key, modifiers=None):
+        for kind in (QtCore.QEvent.KeyPress, QtCore.QEvent.KeyRelease):
+            event = QtGui.QKeyEvent(kind, key, modifiers or QtCore.Qt.NoModifier)
+            QtWidgets.QApplication.sendEvent(self.viewport, event)
+        pump(0.01)
+
+
+@pytest.fixture
+def view_driver(doc):
+    return ViewDriver(active_view())

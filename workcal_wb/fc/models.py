@@ -1,0 +1,164 @@
+"""Models (workpiece X-A, reference B-P) from FreeCAD objects and files, as core ``Cloud``s.
+
+A Part shape is tessellated and a mesh keeps its triangles, so both are matched as surfaces; a point
+cloud gives points only.  Coordinates are the object's as the document shows them (its Placement,
+and that of any containing App::Part, applied): the document frame is the workpiece frame X for the
+workpiece model and the robot base frame B for the reference model.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+import FreeCAD
+
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.geometry import Cloud, checked
+from workcal_wb.core.readers import read_cloud
+
+# Tessellation chord error: a small fraction of the model size, within these bounds (mm).  The
+# matcher's tolerance is 0.3 mm, so even the coarsest bound stays well below it.
+DEFLECTION_FRACTION = 2e-4
+DEFLECTION_RANGE_MM = (0.005, 0.05)
+CAD_EXTENSIONS = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
+MESH_EXTENSIONS = (".stl", ".obj", ".off", ".ply")
+POINT_EXTENSIONS = (".pcd", ".xyz", ".asc", ".pts", ".csv", ".txt")
+MODEL_EXTENSIONS = CAD_EXTENSIONS + MESH_EXTENSIONS + POINT_EXTENSIONS
+
+
+def _label(obj) -> str:
+    return getattr(obj, "Label", None) or getattr(obj, "Name", None) or repr(obj)
+
+
+def _kind(obj):
+    """("mesh"|"points"|"shape"|None, data) without expensive work."""
+    if obj is None:
+        return None, None
+    mesh = getattr(obj, "Mesh", None)
+    if hasattr(mesh, "Topology") and hasattr(mesh, "CountFacets"):
+        return "mesh", mesh
+    pts = getattr(obj, "Points", None)
+    if hasattr(pts, "CountPoints") and hasattr(pts, "Points"):
+        return "points", pts
+    if hasattr(obj, "Shape") or getattr(obj, "TypeId", "") in ("App::Link", "App::LinkPython", "App::Part"):
+        import Part
+
+        try:
+            shape = Part.getShape(obj)
+        except Exception:  # Part.getShape raises for objects it cannot turn into a shape
+            return None, None
+        return "shape", shape
+    return None, None
+
+
+def is_model_object(obj) -> bool:
+    """Whether ``obj`` is of a kind ``model_cloud`` accepts (it may still be empty)."""
+    return _kind(obj)[0] is not None
+
+
+def check_model(obj) -> str:
+    """Raise InputError naming ``obj`` unless it is a usable model; returns its kind.  Cheap: no tessellation."""
+    kind, data = _kind(obj)
+    label = _label(obj)
+    if kind is None:
+        type_id = getattr(obj, "TypeId", type(obj).__name__)
+        raise InputError(f"{label!r} ({type_id}) is not a Part shape, mesh or point cloud, so it cannot be "
+                         "used as a model")
+    if kind == "mesh" and data.CountFacets == 0:
+        raise InputError(f"model {label!r}: the mesh has no faces")
+    if kind == "points" and data.CountPoints == 0:
+        raise InputError(f"model {label!r}: the point cloud contains no points")
+    if kind == "shape":
+        if data.isNull():
+            raise InputError(f"model {label!r}: its shape is empty")
+        if not data.Faces:
+            raise InputError(f"model {label!r}: its shape has no faces (only {len(data.Edges)} edges and "
+                             f"{len(data.Vertexes)} vertices); a model needs a solid or surfaces")
+    return kind
+
+
+def deflection_for(shape) -> float:
+    low, high = DEFLECTION_RANGE_MM
+    return float(min(high, max(low, DEFLECTION_FRACTION * shape.BoundBox.DiagonalLength)))
+
+
+def model_cloud(obj, deflection_mm: float | None = None) -> Cloud:
+    """The model as a Cloud in mm: triangles for shapes and meshes, points for point clouds."""
+    kind = check_model(obj)
+    data = _kind(obj)[1]
+    label = _label(obj)
+    if kind == "shape":
+        vertices, facets = data.tessellate(deflection_mm or deflection_for(data))
+        points = np.array([tuple(v) for v in vertices], dtype=np.float64).reshape(-1, 3)
+        triangles = np.array(facets, dtype=np.int64).reshape(-1, 3)
+        if not len(triangles):
+            raise InputError(f"model {label!r}: tessellating its shape gave no triangles")
+        cloud = Cloud(points, None, triangles, label)
+    elif kind == "mesh":
+        vertices, facets = data.Topology
+        cloud = Cloud(np.array([tuple(v) for v in vertices], dtype=np.float64).reshape(-1, 3), None,
+                      np.array(facets, dtype=np.int64).reshape(-1, 3), label)
+        cloud = _with_parent_placement(obj, cloud)
+    else:
+        cloud = Cloud(np.array([tuple(v) for v in data.Points], dtype=np.float64).reshape(-1, 3), name=label)
+        cloud = _with_parent_placement(obj, cloud)
+    return checked(cloud)
+
+
+def _with_parent_placement(obj, cloud: Cloud) -> Cloud:
+    """Mesh and Points kernels already apply the object's own Placement; add that of containers."""
+    try:
+        extra = obj.getGlobalPlacement().multiply(obj.Placement.inverse())
+    except Exception:  # objects without Placement
+        return cloud
+    if extra.isIdentity():
+        return cloud
+    T = np.array(extra.toMatrix().A, dtype=np.float64).reshape(4, 4)
+    return cloud.transformed(T)
+
+
+def import_model_file(doc, path, units: str = "mm", name: str | None = None):
+    """Add a model file to ``doc``: STEP/IGES/BREP as Part::Feature (they carry their own unit),
+    STL/OBJ/OFF/PLY meshes as Mesh::Feature, point files as Points::Feature (read in ``units``)."""
+    path = str(path)
+    ext = os.path.splitext(path)[1].lower()
+    label = name or os.path.basename(path)
+    if ext not in MODEL_EXTENSIONS:
+        raise InputError(f"{path}: unknown model file type {ext or '(no extension)'!r}; WorkCal reads "
+                         f"{', '.join(MODEL_EXTENSIONS)}")
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: file does not exist")
+    if ext in CAD_EXTENSIONS:
+        import Part
+
+        try:
+            shape = Part.read(path)
+        except Exception as exc:  # OCC reports unreadable files as Part.OCCError / RuntimeError
+            raise InputError(f"{path}: cannot be read as a {ext[1:].upper()} file ({exc})") from None
+        if shape.isNull() or not shape.Faces:
+            raise InputError(f"{path}: contains no surfaces")
+        obj = doc.addObject("Part::Feature", _object_name(label))
+        obj.Shape = shape
+    else:
+        cloud = read_cloud(path, units=units)
+        if cloud.is_mesh:
+            import Mesh
+
+            vectors = [FreeCAD.Vector(*p) for p in cloud.points.tolist()]
+            obj = doc.addObject("Mesh::Feature", _object_name(label))
+            obj.Mesh = Mesh.Mesh((vectors, [tuple(t) for t in cloud.triangles.tolist()]))
+        else:
+            import Points
+
+            obj = doc.addObject("Points::Feature", _object_name(label))
+            obj.Points = Points.Points(list(map(tuple, cloud.points.tolist())))
+        for warning in cloud.warnings:
+            FreeCAD.Console.PrintWarning(f"WorkCal: {warning}\n")
+    obj.Label = label
+    return obj
+
+
+def _object_name(label: str) -> str:
+    base = "".join(c if c.isalnum() else "_" for c in os.path.splitext(label)[0]) or "Model"
+    return base if not base[0].isdigit() else "Model_" + base

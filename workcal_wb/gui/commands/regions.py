@@ -1,0 +1,224 @@
+"""Scan regions: pick them (box, lasso), find them automatically, clear them.
+
+The scan a command works on: the selected WorkCal scan, else the document's setup scan, else a
+selected point cloud or mesh, else the only WorkCal scan in the document.  ``open_pick_panel``,
+``auto_regions`` and ``clear_regions`` are the commands without their dialogs.
+"""
+from __future__ import annotations
+
+import FreeCAD
+
+import workcal_wb
+from workcal_wb.core.errors import InputError, WorkCalError
+from workcal_wb.gui.task_panels.common import active_document, guarded, message, selected_objects, transaction, \
+    warning
+
+QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
+translate = FreeCAD.Qt.translate
+
+
+def target_scan(doc=None):
+    """The scan the user means (see the module doc); InputError when there is none."""
+    from workcal_wb.fc import scan as fc_scan
+    from workcal_wb.fc.setup import get_setup
+
+    doc = doc or active_document()
+    selected = [o for o in selected_objects() if o.Document is doc]
+    for obj in selected:
+        if fc_scan.is_scan(obj):
+            return obj
+    chosen = get_setup(doc)["scan"]
+    if chosen is not None:
+        return chosen
+    for obj in selected:
+        if fc_scan.can_be_scan(obj):
+            return obj
+    scans = [o for o in doc.Objects if fc_scan.is_scan(o)]
+    if len(scans) == 1:
+        return scans[0]
+    if scans:
+        raise InputError(translate("WorkCal", "{} scans in {}: select the one to use").format(len(scans), doc.Label))
+    raise InputError(translate("WorkCal", "no scan in {}: import one first (WorkCal > Import scan) or select a "
+                                          "point cloud or mesh").format(doc.Label))
+
+
+def _find_regions():
+    try:
+        from workcal_wb.core.calibration import find_regions
+    except ImportError:
+        from workcal_wb.core.regions import find_regions
+    return find_regions
+
+
+# --- picking -------------------------------------------------------------------------------------
+
+def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece"):
+    """Open the picking task panel on ``scan`` (or switch the open one to ``shape``); returns the panel."""
+    import FreeCADGui
+
+    from workcal_wb.gui.picking import PickPanel
+
+    active = FreeCADGui.Control.activeDialog()
+    current = _open_pick_panel()
+    if current is not None:
+        current.set_shape(shape)
+        return current
+    if active:
+        raise WorkCalError(translate("WorkCal", "another task panel is open; close it first"))
+    scan = scan or target_scan()
+    gui_doc = FreeCADGui.getDocument(scan.Document.Name)
+    view = gui_doc.ActiveView if gui_doc is not None else None
+    if view is None or not hasattr(view, "addEventCallbackPivy"):
+        raise WorkCalError(translate("WorkCal", "picking needs the 3D view of {}: activate it first").format(
+            scan.Document.Label))
+    panel = PickPanel(scan, view, shape, role)
+    _PANELS.append(panel)
+    FreeCADGui.Control.showDialog(panel)
+    return panel
+
+
+_PANELS = []  # the pick panel shown (task dialogs keep no Python-visible reference to it)
+
+
+def _open_pick_panel():
+    import FreeCADGui
+
+    live = [p for p in _PANELS if p.tool.active]
+    _PANELS[:] = live
+    if live and FreeCADGui.Control.activeDialog():
+        return live[-1]
+    return None
+
+
+class PickCommand:
+    SHAPE, NAME = "box", "WorkCal_PickBox"
+    MENU = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick region (box)")
+    TIP = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick the workpiece or the reference region of the scan by "
+                                               "dragging boxes in the 3D view (Shift adds, Ctrl subtracts)")
+
+    def GetResources(self):
+        return {"Pixmap": workcal_wb.icon(self.NAME), "MenuText": self.MENU, "ToolTip": self.TIP}
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None and bool(FreeCAD.GuiUp)
+
+    def Activated(self):
+        guarded(translate("WorkCal", "Pick region"))(open_pick_panel)(shape=self.SHAPE)
+
+
+class PickLassoCommand(PickCommand):
+    SHAPE, NAME = "lasso", "WorkCal_PickLasso"
+    MENU = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick region (lasso)")
+    TIP = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick the workpiece or the reference region of the scan by "
+                                                 "drawing polygons in the 3D view; right-click or Enter closes")
+
+
+# --- automatic regions ---------------------------------------------------------------------------
+
+def auto_regions(scan=None, workpiece=None, reference=None, background: bool = True) -> dict:
+    """Find the workpiece and reference regions with the models of the setup and store them (source
+    "auto", one undo step); returns what ``find_regions`` returned.  InputError says what is missing
+    or which object was not found; the document is then unchanged."""
+    from workcal_wb.fc import scan as fc_scan
+    from workcal_wb.fc.models import model_cloud
+    from workcal_wb.fc.setup import get_setup
+
+    scan = scan or target_scan()
+    doc = scan.Document
+    setup = get_setup(doc)
+    workpiece = workpiece or setup["workpiece"]
+    reference = reference or setup["reference"]
+    missing = [name for name, obj in ((translate("WorkCal", "workpiece model"), workpiece),
+                                      (translate("WorkCal", "reference model"), reference)) if obj is None]
+    if missing:
+        raise InputError(translate("WorkCal", "automatic regions need the {}: choose it first "
+                                              "(WorkCal > Choose models)").format(" and the ".join(missing)))
+    cloud = fc_scan.scan_cloud(scan)
+    models = model_cloud(workpiece), model_cloud(reference)
+    find_regions = _find_regions()
+
+    def job():
+        return find_regions(cloud, *models)
+
+    if background:
+        from workcal_wb.gui.progress import run_in_background
+
+        found = run_in_background(job, translate("WorkCal", "Finding the workpiece and the reference in {}...")
+                                  .format(scan.Label), translate("WorkCal", "Automatic regions"))
+    else:
+        found = job()
+    with transaction(doc, translate("WorkCal", "Find regions automatically")):
+        fc_scan.set_regions(scan, found["workpiece"], found["reference"], source="auto")
+    _update_display(scan)
+    for text in found.get("warnings", []):
+        warning(text)
+    message(translate("WorkCal", "regions of {} found: workpiece {} points, reference {} points; check them "
+                                 "and correct with the pick tools if needed").format(
+        scan.Label, len(found["workpiece"]), len(found["reference"])))
+    return found
+
+
+def _update_display(scan) -> None:
+    if FreeCAD.GuiUp:
+        from workcal_wb.gui import region_display
+
+        region_display.update(scan)
+
+
+def clear_regions(scan=None) -> bool:
+    """Remove both regions of the scan (one undo step); False (and a warning) when there were none."""
+    from workcal_wb.fc import scan as fc_scan
+
+    scan = scan or target_scan()
+    if not fc_scan.has_regions(scan):
+        warning(translate("WorkCal", "{} has no regions to clear").format(scan.Label))
+        return False
+    with transaction(scan.Document, translate("WorkCal", "Clear regions")):
+        fc_scan.set_regions(scan)
+    _update_display(scan)
+    message(translate("WorkCal", "regions of {} cleared").format(scan.Label))
+    return True
+
+
+class AutoRegionsCommand:
+    def GetResources(self):
+        return {
+            "Pixmap": workcal_wb.icon("WorkCal_AutoRegions"),
+            "MenuText": QT_TRANSLATE_NOOP("WorkCal_AutoRegions", "Find regions automatically"),
+            "ToolTip": QT_TRANSLATE_NOOP(
+                "WorkCal_AutoRegions",
+                "Find the workpiece and the reference object in the scan with their models (removes the "
+                "platform, splits the objects and matches them); correct the result with the pick tools"),
+        }
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None
+
+    @guarded("Find regions automatically")
+    def Activated(self):
+        auto_regions()
+
+
+class ClearRegionsCommand:
+    def GetResources(self):
+        return {
+            "Pixmap": workcal_wb.icon("WorkCal_ClearRegions"),
+            "MenuText": QT_TRANSLATE_NOOP("WorkCal_ClearRegions", "Clear regions"),
+            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_ClearRegions",
+                                         "Remove the workpiece and reference regions of the scan"),
+        }
+
+    def IsActive(self):
+        return FreeCAD.ActiveDocument is not None
+
+    @guarded("Clear regions")
+    def Activated(self):
+        clear_regions()
+
+
+COMMANDS = {
+    "WorkCal_PickBox": PickCommand(),
+    "WorkCal_PickLasso": PickLassoCommand(),
+    "WorkCal_AutoRegions": AutoRegionsCommand(),
+    "WorkCal_ClearRegions": ClearRegionsCommand(),
+}

@@ -1,0 +1,83 @@
+"""View providers of WorkCal's scan and setup objects (tree icons, region overlay, double-click).
+
+``workcal_wb.gui.workbench`` registers them with ``workcal_wb.fc.init.VIEW_PROVIDERS`` at GUI start-up,
+so objects made by the FreeCAD layer get them without that layer importing GUI code.  FreeCAD
+re-creates them from the class path saved in the document.
+"""
+from __future__ import annotations
+
+import workcal_wb
+from workcal_wb.fc import scan as fc_scan
+
+REGION_PROPERTIES = {fc_scan.WORKPIECE_PROP, fc_scan.REFERENCE_PROP, fc_scan.SOURCE_PROP, "Points", "Placement"}
+
+
+class _ViewProvider:
+    ICON = "WorkCal"
+
+    def __init__(self, vobj):
+        vobj.Proxy = self
+
+    def attach(self, vobj):
+        self.ViewObject = vobj
+        self.Object = vobj.Object
+
+    def getIcon(self):
+        return workcal_wb.icon(self.ICON)
+
+    # FreeCAD 0.20 serialises proxies with __getstate__/__setstate__, 1.x prefers dumps/loads.
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+class ViewProviderScan(_ViewProvider):
+    """A WorkCal scan: FreeCAD's point display plus the region overlay (see region_display)."""
+
+    ICON = "WorkCal_Scan"
+    COLOR = (0.33, 0.34, 0.36)  # dark grey: visible on FreeCAD's light background, under the region colours
+
+    def __init__(self, vobj):
+        super().__init__(vobj)
+        if hasattr(vobj, "ShapeColor"):  # only for a new scan: a reopened one keeps the user's colour
+            vobj.ShapeColor = self.COLOR
+
+    def updateData(self, obj, prop):
+        if prop in REGION_PROPERTIES:
+            from workcal_wb.gui import region_display
+
+            region_display.schedule(obj)
+
+    def onChanged(self, vobj, prop):
+        if prop == "Visibility" and getattr(vobj, "Object", None) is not None:
+            from workcal_wb.gui import region_display
+
+            region_display.set_visible(vobj.Object, bool(vobj.Visibility))
+
+    def doubleClicked(self, vobj):
+        from workcal_wb.gui.commands.regions import open_pick_panel
+        from workcal_wb.gui.task_panels.common import guarded
+
+        guarded("Pick region")(open_pick_panel)(vobj.Object)
+        return True
+
+
+class ViewProviderSetup(_ViewProvider):
+    """The document's WorkCal setup: double-click opens Choose models."""
+
+    ICON = "WorkCal_Setup"
+
+    def doubleClicked(self, vobj):
+        from workcal_wb.gui.commands.models import open_panel
+        from workcal_wb.gui.task_panels.common import guarded
+
+        guarded("Choose models")(open_panel)(vobj.Object.Document)
+        return True
