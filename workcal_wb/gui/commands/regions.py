@@ -42,14 +42,6 @@ def target_scan(doc=None):
                                           "point cloud or mesh").format(doc.Label))
 
 
-def _find_regions():
-    try:
-        from workcal_wb.core.calibration import find_regions
-    except ImportError:
-        from workcal_wb.core.regions import find_regions
-    return find_regions
-
-
 # --- picking -------------------------------------------------------------------------------------
 
 def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece"):
@@ -135,7 +127,7 @@ def auto_regions(scan=None, workpiece=None, reference=None, background: bool = T
                                               "(WorkCal > Choose models)").format(" and the ".join(missing)))
     cloud = fc_scan.scan_cloud(scan)
     models = model_cloud(workpiece), model_cloud(reference)
-    find_regions = _find_regions()
+    from workcal_wb.core.regions import find_regions
 
     def job():
         return find_regions(cloud, *models)
