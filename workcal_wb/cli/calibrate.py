@@ -17,6 +17,7 @@ from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
 UNITS = ("mm", "m", "in")
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
 
 
 def add_parser(subparsers):
@@ -28,7 +29,8 @@ def add_parser(subparsers):
                     "Exit status: 0 ok or ambiguous, 1 failed, 2 bad input.")
     p.add_argument("--scan", nargs="+", required=True, metavar="FILE",
                    help="scene scan(s) from one scanner position (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
-    p.add_argument("--workpiece", required=True, metavar="FILE", help="workpiece model X-A (mesh or point cloud)")
+    p.add_argument("--workpiece", required=True, metavar="FILE",
+                   help="workpiece model X-A (mesh, point cloud, or STEP/IGES/BREP when run in freecadcmd)")
     p.add_argument("--reference", required=True, metavar="FILE",
                    help="reference model B-P, in robot base frame coordinates (mesh or point cloud)")
     p.add_argument("--units", choices=UNITS, default="mm", help="units of the scan files (default mm)")
@@ -73,6 +75,18 @@ def _regions(args, scan: Cloud):
     return regions
 
 
+def read_model(path, units: str) -> Cloud:
+    """A model file; CAD solids (STEP, IGES, BREP) are tessellated through FreeCAD when it is there."""
+    if Path(path).suffix.lower() not in CAD_SUFFIXES:
+        return read_cloud(path, units=units)
+    try:
+        from workcal_wb.fc.models import read_model_file
+    except ImportError:
+        raise InputError(f"{path}: STEP/IGES/BREP models are read through FreeCAD; run this command inside "
+                         "freecadcmd (see the README), or export the model as STL") from None
+    return read_model_file(path, units)
+
+
 def run(args) -> int:
     from workcal_wb.core.report import write_report
 
@@ -81,8 +95,8 @@ def run(args) -> int:
         for warning in cloud.warnings:
             print(f"warning: {warning}", file=sys.stderr)
     model_units = args.model_units or args.units
-    workpiece = read_cloud(args.workpiece, units=model_units)
-    reference = read_cloud(args.reference, units=model_units)
+    workpiece = read_model(args.workpiece, model_units)
+    reference = read_model(args.reference, model_units)
     toolpath = read_gcode(args.toolpath) if args.toolpath else None
     merged = merge_scans(scans)
     options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)

@@ -162,3 +162,14 @@ def import_model_file(doc, path, units: str = "mm", name: str | None = None):
 def _object_name(label: str) -> str:
     base = "".join(c if c.isalnum() else "_" for c in os.path.splitext(label)[0]) or "Model"
     return base if not base[0].isdigit() else "Model_" + base
+
+
+def read_model_file(path, units: str = "mm") -> Cloud:
+    """A model file as a Cloud without touching any open document (a scratch document is used for
+    CAD files and closed again): how headless commands read STEP/IGES/BREP."""
+    doc = FreeCAD.newDocument("WorkCalScratch", hidden=True)
+    try:
+        return model_cloud(import_model_file(doc, path, units))
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
