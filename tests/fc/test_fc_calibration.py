@@ -1,0 +1,294 @@
+"""The calibration document object under freecadcmd: truth, save/reopen, recompute, bad inputs, deviation map."""
+import json
+
+import numpy as np
+import pytest
+
+FreeCAD = pytest.importorskip("FreeCAD")
+
+from workcal_wb.core import frames  # noqa: E402
+from workcal_wb.core.errors import InputError  # noqa: E402
+from workcal_wb.core.geometry import Cloud  # noqa: E402
+from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
+from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
+from workcal_wb.fc import calibration_object as co  # noqa: E402
+
+ROT_TOL_DEG, TRANS_TOL_MM = 0.05, 0.1
+SEED = 0  # calibration seed (the default)
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    """The car with a clay lump beside the L-block, scanned once; truth U, V, W."""
+    scene = build_scene("car", seed=0, clay_change=["lump"])
+    scan = Scanner.aimed_at(scene).scan(scene)
+    return scene, scan
+
+
+def add_mesh(doc, cloud: Cloud, name: str):
+    import Mesh
+
+    vectors = [FreeCAD.Vector(*p) for p in cloud.points.tolist()]
+    obj = doc.addObject("Mesh::Feature", name)
+    obj.Mesh = Mesh.Mesh((vectors, [tuple(int(i) for i in t) for t in cloud.triangles.tolist()]))
+    return obj
+
+
+def add_scan(doc, points: np.ndarray, name: str = "Scan"):
+    from workcal_wb.fc.scan import make_scan
+
+    return make_scan(doc, Cloud(points, name=name), name, "mm", "simulated scan")
+
+
+@pytest.fixture
+def document(simulated, tmp_path):
+    """A document with the scan, X-A and B-P in it (what WorkCal's import commands produce)."""
+    scene, scan = simulated
+    doc = FreeCAD.newDocument("WorkCalCalibrationTest")
+    objects = {
+        "scan": add_scan(doc, scan.points),
+        "workpiece": add_mesh(doc, scene.workpiece_model(), "Workpiece"),
+        "reference": add_mesh(doc, scene.reference_model(), "Reference"),
+    }
+    doc.recompute()
+    name = doc.Name
+    yield doc, objects
+    if name in FreeCAD.listDocuments():
+        FreeCAD.closeDocument(name)
+
+
+def matrix(value):
+    return co.matrix_of(value)
+
+
+def assert_pose(T, truth, rot_tol=ROT_TOL_DEG, trans_tol=TRANS_TOL_MM):
+    assert frames.rotation_between_deg(T, truth) < rot_tol
+    assert np.linalg.norm(T[:3, 3] - truth[:3, 3]) < trans_tol
+
+
+def names(doc):
+    return sorted(o.Name for o in doc.Objects)
+
+
+def test_calibration_object_matches_truth_and_survives_reopen(simulated, document, tmp_path):
+    scene, scan = simulated
+    doc, objs = document
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], tolerance_mm=0.3,
+                              method="robust", seed=SEED)
+    assert cal.TypeId == "Part::FeaturePython" and co.is_calibration(cal)
+    assert cal.Status == "ok", cal.Reasons
+    W, U, V = matrix(cal.WMatrix), matrix(cal.UMatrix), matrix(cal.VMatrix)
+    assert_pose(W, scene.W)
+    assert_pose(U, scan.U)
+    assert_pose(V, scan.V)
+    np.testing.assert_allclose(W, frames.invert(V) @ U, atol=1e-6)
+    np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-6)  # the object sits at W in B
+    np.testing.assert_allclose(matrix(cal.W), W, atol=1e-6)
+    np.testing.assert_allclose(tuple(cal.WEulerZYZ), frames.euler_zyz(W), atol=1e-9)
+    assert cal.WOmega.Value == pytest.approx(frames.omega(W))
+    np.testing.assert_allclose(tuple(cal.WTranslation), W[:3, 3], atol=1e-9)
+    assert 0 < cal.WorkpieceRMS.Value < 0.3 and 0 < cal.ReferenceRMS.Value < 0.3
+    assert cal.WorkpieceWithinTolerance > 50
+    assert 0 < cal.SurfaceBound.Value < 0.3
+    assert cal.Scan == objs["scan"] and cal.Workpiece == objs["workpiece"] and cal.Reference == objs["reference"]
+    assert cal.Method == "robust" and cal.Tolerance.Value == pytest.approx(0.3) and cal.Regions == "Auto"
+    assert len(cal.Shape.Edges) == 9  # triads of X, B and S
+    result = co.result_of(cal)
+    np.testing.assert_allclose(result.W, W, atol=1e-12)
+    stored = json.loads(cal.ResultJson)
+    before = {p: cal.getPropertyByName(p) for p in ("Status", "Warnings", "Reasons", "Method", "Regions", "Seed")}
+    key, cal_name = cal.InputsKey, cal.Name
+    input_names = {role: o.Name for role, o in objs.items()}
+
+    path = str(tmp_path / "calibrated.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc = FreeCAD.openDocument(path)
+    try:
+        cal = doc.getObject(cal_name)
+        assert isinstance(cal.Proxy, co.CalibrationFeature)
+        assert json.loads(cal.ResultJson) == stored
+        assert cal.InputsKey == key
+        for prop, value in before.items():
+            assert cal.getPropertyByName(prop) == value
+        np.testing.assert_allclose(matrix(cal.WMatrix), W, atol=1e-9)
+        np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-9)
+        assert {"scan": cal.Scan.Name, "workpiece": cal.Workpiece.Name, "reference": cal.Reference.Name} == input_names
+        assert "Touched" not in cal.State
+        again = co.result_of(cal)
+        assert again.to_dict() == result.to_dict()
+
+        calls = []
+        original = co.run
+        co.run = lambda *a, **k: calls.append(1) or original(*a, **k)
+        try:
+            cal.touch()
+            doc.recompute()  # same inputs and options: no new calibration
+        finally:
+            co.run = original
+        assert calls == [] and cal.Status == "ok"
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_recomputes_when_the_scan_changes(simulated, document):
+    scene, scan = simulated
+    doc, objs = document
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], seed=SEED)
+    assert cal.Status == "ok"
+    # The scanner moved: every scan point seen from a frame 4 mm and 1 deg away.  U and V follow, W does not.
+    T = frames.rigid(frames.rot_z(1.0), (4.0, -2.0, 1.0))
+    import Points
+
+    objs["scan"].Points = Points.Points([tuple(p) for p in frames.apply(T, scan.points).tolist()])
+    doc.recompute()
+    assert cal.Status == "ok"
+    assert_pose(matrix(cal.UMatrix), T @ scan.U)
+    assert_pose(matrix(cal.VMatrix), T @ scan.V)
+    assert_pose(matrix(cal.WMatrix), scene.W)
+    # An option change recomputes too: the stored options and the result follow.
+    cal.Tolerance = 0.5
+    doc.recompute()
+    assert co.result_of(cal).tolerance_mm == pytest.approx(0.5)
+
+
+def test_picked_regions_are_used(simulated, document):
+    scene, scan = simulated
+    doc, objs = document
+    from workcal_wb.fc.scan import set_regions
+
+    with pytest.raises(InputError, match="region"):
+        co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], regions="Picked", seed=SEED)
+    set_regions(objs["scan"], workpiece=np.flatnonzero(scan.mask("workpiece")),
+                reference=np.flatnonzero(scan.mask("reference")))
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], regions="Picked", seed=SEED)
+    assert cal.Regions == "Picked" and co.result_of(cal).regions["source"] == "user"
+    assert_pose(matrix(cal.WMatrix), scene.W)
+
+
+def test_bad_inputs_leave_the_document_unchanged(simulated, document):
+    doc, objs = document
+    group = doc.addObject("App::DocumentObjectGroup", "NotAModel")
+    empty = doc.addObject("Points::Feature", "EmptyScan")
+    doc.recompute()
+    before = names(doc)
+    with pytest.raises(InputError, match="NotAModel"):
+        co.make_calibration(doc, objs["scan"], group, objs["reference"])
+    with pytest.raises(InputError, match="EmptyScan.*(no points|empty)|(no points|empty).*EmptyScan"):
+        co.make_calibration(doc, empty, objs["workpiece"], objs["reference"], seed=SEED)
+    with pytest.raises(InputError, match="scan cannot also be"):
+        co.make_calibration(doc, objs["scan"], objs["scan"], objs["reference"])
+    with pytest.raises(InputError, match="method"):
+        co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], method="magic")
+    with pytest.raises(InputError, match="tolerance"):
+        co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], tolerance_mm=-1)
+    with pytest.raises(InputError, match="no scan"):
+        co.make_calibration(doc, None, objs["workpiece"], objs["reference"], seed=SEED)
+    assert names(doc) == before
+
+
+def test_failed_calibration_is_kept_with_its_reasons(simulated, document):
+    """A tolerance below the scanner noise: the RMS gates fail, the object is still added."""
+    from workcal_wb.fc.scan import set_regions
+
+    _, scan = simulated
+    doc, objs = document
+    set_regions(objs["scan"], workpiece=np.flatnonzero(scan.mask("workpiece")),
+                reference=np.flatnonzero(scan.mask("reference")))
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], tolerance_mm=0.05,
+                              regions="Picked", resamples=2, seed=SEED)
+    assert cal.Status == "failed"
+    assert cal.Reasons
+    result = co.result_of(cal)
+    assert result.status == cal.Status
+
+
+def test_placed_model_follows_w(simulated, document):
+    scene, _ = simulated
+    doc, objs = document
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], placed_model=True,
+                              seed=SEED)
+    links = [o for o in cal.InList if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE]
+    assert len(links) == 1
+    link = links[0]
+    assert link.LinkedObject == objs["workpiece"]
+    np.testing.assert_allclose(matrix(link.Placement), matrix(cal.WMatrix), atol=1e-9)
+    assert co.show_placed_model(cal) == link  # not duplicated
+
+
+def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
+    from workcal_wb.fc import deviation_view
+
+    scene, scan = simulated
+    doc, objs = document
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], seed=SEED)
+    before = names(doc)
+    dev = deviation_view.make_deviation_map(doc, cal)
+    assert names(doc) == sorted(before + [dev.Name])
+    d = np.array(dev.Deviations)
+    assert len(d) == len(co.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
+    assert len(dev.Color) == len(d)
+    assert np.nanmax(d) > 1.0  # the lump stands out of the model
+    assert dev.Max.Value > 1.0 and dev.WithinTolerance > 50
+    lump_colour = np.array(dev.Color[int(np.nanargmax(d))][:3])
+    assert lump_colour[0] > 0.9 and lump_colour[2] < 0.1  # red
+    # The points with a large deviation are where the clay was added (truth: the reshaped vertices).
+    moved = scene.reshaped.displacement_mm > 1.0
+    lump_centre_S = frames.apply(scan.U, scene.workpiece_model().points[moved].mean(axis=0)[None])[0]
+    far = np.array([tuple(p) for p in dev.Points.Points])[d > 1.0]
+    assert np.linalg.norm(far.mean(axis=0) - lump_centre_S) < 15.0
+
+    # The map is saved with the document and comes back as it was, without recomputing.
+    path, name, colours = str(tmp_path / "deviation.FCStd"), dev.Name, list(dev.Color)
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc = FreeCAD.openDocument(path)
+    try:
+        dev = doc.getObject(name)
+        assert isinstance(dev.Proxy, deviation_view.DeviationFeature) and deviation_view.is_deviation_map(dev)
+        np.testing.assert_array_equal(np.array(dev.Deviations), d)
+        np.testing.assert_allclose(np.array(dev.Color), np.array(colours), atol=1 / 255)  # saved as 8-bit RGBA
+        assert "Touched" not in dev.State
+        assert dev.Calibration is not None and co.is_calibration(dev.Calibration)
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
+def test_deviation_map_refuses_a_calibration_without_u(document):
+    from workcal_wb.core.result import CalibrationResult
+    from workcal_wb.fc import deviation_view
+
+    doc, objs = document
+    inputs = co.gather_inputs(objs["scan"], objs["workpiece"], objs["reference"])
+    failed = CalibrationResult("failed", W=None, reasons=["test"])
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], result=failed, inputs=inputs)
+    before = names(doc)
+    with pytest.raises(InputError, match="no U"):
+        deviation_view.make_deviation_map(doc, cal)
+    assert names(doc) == before
+
+
+def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
+    from workcal_wb.core.simulate.toolpath_sample import sample_toolpath
+    from workcal_wb.core.toolpath import format_gcode
+
+    scene, _ = simulated
+    doc, objs = document
+    gcode = tmp_path / "finishing.nc"
+    gcode.write_text(format_gcode(sample_toolpath(scene)), encoding="utf-8")
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], toolpath=str(gcode),
+                              seed=SEED)
+    assert cal.ToolpathFile == str(gcode) and cal.Toolpath is None
+    result = co.result_of(cal)
+    assert result.inputs["toolpath_points"] > 100
+    assert 0 < cal.ToolpathBound.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
+    assert cal.ToolpathBound.Value < 0.3
+    calls = []
+    original = co.run
+    co.run = lambda *a, **k: calls.append(1) or original(*a, **k)
+    try:
+        cal.touch()
+        doc.recompute()  # the file is part of the inputs: unchanged, so no new calibration
+    finally:
+        co.run = original
+    assert calls == []

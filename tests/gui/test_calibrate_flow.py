@@ -1,0 +1,485 @@
+"""End to end in the FreeCAD GUI (Xvfb): simulated scene -> calibrate through the task panel -> reopen ->
+deviation map -> calibrated toolpath -> robot program -> report; screenshots of each step.
+
+The tests share one document and run in file order (each step needs the previous one); a failed step
+makes the later ones skip instead of failing for the wrong reason.
+"""
+import csv
+import os
+import time
+
+import numpy as np
+import pytest
+
+FreeCAD = pytest.importorskip("FreeCAD")
+if not FreeCAD.GuiUp:
+    pytest.skip("needs the FreeCAD GUI (run tests/gui/run_gui_tests.py under xvfb-run freecad)",
+                allow_module_level=True)
+
+import FreeCADGui  # noqa: E402
+
+from workcal_wb.core import frames  # noqa: E402
+from workcal_wb.core.geometry import Cloud  # noqa: E402
+from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
+from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
+from workcal_wb.core.simulate.toolpath_sample import sample_toolpath  # noqa: E402
+from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.gui.task_panels import QtCore, QtWidgets  # noqa: E402
+from workcal_wb.gui.task_panels import common  # noqa: E402
+
+ROT_TOL_DEG, TRANS_TOL_MM = 0.05, 0.1
+SEED = 0  # calibration seed (the default)
+SHOT_SIZE = (1000, 750)
+
+
+@pytest.fixture(scope="module")
+def flow(tmp_path_factory, request):
+    """State shared by the steps: scene, truth, the document and what each step made."""
+    scene = build_scene("car", seed=0, clay_change=["lump"])
+    scan = Scanner.aimed_at(scene).scan(scene)
+    common.INTERACTIVE = False  # no modal message boxes in tests
+    state = {"scene": scene, "scan": scan, "dir": tmp_path_factory.mktemp("calibrate_flow"),
+             "failures_at_start": request.session.testsfailed}
+    yield state
+    common.INTERACTIVE = True
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+    doc = state.get("doc")
+    if doc is not None:
+        try:
+            FreeCAD.closeDocument(doc.Name)
+        except Exception:
+            pass
+
+
+@pytest.fixture
+def step(flow, request):
+    """The shared state; skips when an earlier step of this flow failed."""
+    if request.session.testsfailed > flow["failures_at_start"]:
+        pytest.skip("an earlier step of the calibrate flow failed")
+    return flow
+
+
+def pump(seconds=0.05):
+    common.process_events(seconds)
+
+
+# Looking from the scanner: along +z of S with -y of S up (camera looks along its own -z).
+FROM_SCANNER = FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 180)
+
+
+def screenshot(output_dir, name, only=None, orientation=None):
+    """Save the 3D view; ``only``: show just these objects (fitted), the others are hidden meanwhile."""
+    view = FreeCADGui.ActiveDocument.ActiveView
+    hidden = []
+    if only:
+        for obj in FreeCADGui.ActiveDocument.Document.Objects:
+            vobj = getattr(obj, "ViewObject", None)
+            if vobj is not None and obj not in only and vobj.Visibility:
+                vobj.Visibility = False
+                hidden.append(vobj)
+        for obj in only:
+            obj.ViewObject.Visibility = True
+    if orientation is not None:
+        view.setCameraOrientation(orientation)
+    else:
+        view.viewIsometric()
+    view.fitAll()
+    pump(0.1)
+    path = os.path.join(str(output_dir), name)
+    try:
+        view.saveImage(path, SHOT_SIZE[0], SHOT_SIZE[1], "White")
+    finally:
+        for vobj in hidden:
+            vobj.Visibility = True
+    assert os.path.getsize(path) > 5000
+    return path
+
+
+def add_mesh(doc, cloud: Cloud, name: str):
+    import Mesh
+
+    obj = doc.addObject("Mesh::Feature", name)
+    obj.Mesh = Mesh.Mesh(([FreeCAD.Vector(*p) for p in cloud.points.tolist()],
+                          [tuple(int(i) for i in t) for t in cloud.triangles.tolist()]))
+    return obj
+
+
+def object_names(doc):
+    return sorted(o.Name for o in doc.Objects)
+
+
+def task_button(which):
+    """The OK or Cancel button of the open task dialog (what the user clicks)."""
+    wanted = {"ok": QtWidgets.QDialogButtonBox.Ok, "cancel": QtWidgets.QDialogButtonBox.Cancel}[which]
+    end = time.monotonic() + 3.0
+    while time.monotonic() < end:  # the task view shows the buttons once the event loop has run
+        for box in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
+            button = box.button(wanted)
+            if button is not None and button.isVisible() and button.isEnabled():
+                return button
+        pump(0.05)
+    return None
+
+
+def wait_for(predicate, timeout_s=60.0):
+    end = time.monotonic() + timeout_s
+    while not predicate() and time.monotonic() < end:
+        pump(0.05)
+    return predicate()
+
+
+def assert_pose(T, truth):
+    assert frames.rotation_between_deg(T, truth) < ROT_TOL_DEG
+    assert np.linalg.norm(T[:3, 3] - truth[:3, 3]) < TRANS_TOL_MM
+
+
+def test_01_import_simulated_scene(step, workbench, output_dir):
+    from workcal_wb.fc.scan import make_scan
+    from workcal_wb.fc.setup import set_setup
+
+    flow = step
+    doc = FreeCAD.newDocument("WorkCalFlow")
+    flow["doc"] = doc
+    scene, scan = flow["scene"], flow["scan"]
+    flow["scan_obj"] = make_scan(doc, Cloud(scan.points, name="scene scan"), "Scan", "mm", "simulated scan")
+    flow["workpiece"] = add_mesh(doc, scene.workpiece_model(), "Workpiece")
+    flow["reference"] = add_mesh(doc, scene.reference_model(), "Reference")
+    set_setup(doc, scan=flow["scan_obj"], workpiece=flow["workpiece"], reference=flow["reference"])
+    doc.recompute()
+    assert flow["scan_obj"].Points.CountPoints == len(scan.points)
+    screenshot(output_dir, "01_imported.png")
+
+
+def test_02_cancel_midway_leaves_the_document_unchanged(step, output_dir):
+    from workcal_wb.gui.commands.calibrate import open_panel
+
+    flow = step
+    doc = flow["doc"]
+    before, undo_before = object_names(doc), doc.UndoCount
+    panel = open_panel(doc)
+    panel.set_options(seed=SEED)
+    assert FreeCADGui.Control.activeDialog()
+    assert panel.start()
+    assert wait_for(lambda: panel.progress_bar.value() > 0 or panel.state != "running", 30)  # under way
+    assert panel.state == "running"
+    cancel = task_button("cancel")
+    assert cancel is not None, "the task dialog's Cancel button was not found"
+    cancel.click()  # what the user does: reject() asks the worker to stop
+    assert panel.wait(60) == "cancelled"
+    assert object_names(doc) == before and doc.UndoCount == undo_before
+    assert not FreeCADGui.Control.activeDialog()
+    screenshot(output_dir, "02_after_cancel.png")
+
+
+def test_03_bad_input_reports_and_changes_nothing(step, report):
+    from workcal_wb.gui.commands.calibrate import open_panel
+
+    flow = step
+    doc = flow["doc"]
+    group = doc.addObject("App::DocumentObjectGroup", "NotAModel")
+    before = object_names(doc)
+    panel = open_panel(doc)
+    panel.set_inputs(workpiece=group)
+    assert not panel.start()
+    assert panel.state == "failed" and "NotAModel" in panel.last_error
+    assert "NotAModel" in panel.status_label.text()
+    assert "NotAModel" in report.since()  # the message reached the Report view
+    assert FreeCADGui.Control.activeDialog()  # the user can fix the input
+    panel.reject()
+    pump()
+    assert not FreeCADGui.Control.activeDialog()
+    assert object_names(doc) == before
+    doc.removeObject(group.Name)
+
+
+def test_04_calibrate_through_the_task_panel(step, output_dir):
+    from workcal_wb.gui.commands.calibrate import open_panel
+
+    flow = step
+    doc, scene = flow["doc"], flow["scene"]
+    before, undo_before = object_names(doc), doc.UndoCount
+    panel = open_panel(doc)
+    assert panel._chosen("scan") == flow["scan_obj"] and panel._chosen("workpiece") == flow["workpiece"]
+    assert panel._chosen("reference") == flow["reference"]
+    panel.set_options(method="robust", tolerance_mm=0.3, regions="Auto", seed=SEED, placed_model=True)
+    ticks = []
+    timer = QtCore.QTimer()
+    timer.timeout.connect(lambda: ticks.append(time.monotonic()))
+    timer.start(20)
+    progress_seen = []
+    ok = task_button("ok")
+    assert ok is not None, "the task dialog's OK button was not found"
+    ok.click()  # accept(): starts the worker, the dialog stays open
+    assert panel.state == "running"
+    while True:
+        pump(0.05)
+        if panel.state != "running":  # done: the panel and its widgets are gone
+            break
+        bar = panel.progress
+        if bar is not None and bar.bar is not None:
+            progress_seen.append(bar.bar.value())
+    timer.stop()
+    assert panel.state == "done", panel.last_error
+    # The window stayed responsive: the timer kept firing while the worker ran.
+    gaps = np.diff(ticks)
+    assert len(ticks) > 20 and gaps.max() < 1.0, f"event loop blocked for {gaps.max():.2f} s"
+    assert max(progress_seen) > 0  # the status-bar progress bar moved
+    cal = panel.created
+    assert co.is_calibration(cal) and cal.Status == "ok", cal.Reasons
+    assert_pose(co.matrix_of(cal.WMatrix), scene.W)
+    assert_pose(co.matrix_of(cal.UMatrix), flow["scan"].U)
+    assert_pose(co.matrix_of(cal.VMatrix), flow["scan"].V)
+    # One undo step adds the calibration and the placed model; undo removes both, redo brings them back.
+    assert doc.UndoCount == undo_before + 1
+    added = sorted(set(object_names(doc)) - set(before))
+    assert cal.Name in added and len(added) == 2
+    doc.undo()
+    assert object_names(doc) == before
+    doc.redo()
+    assert object_names(doc) == sorted(before + added)
+    cal = doc.getObject(cal.Name)
+    assert not FreeCADGui.Control.activeDialog()
+    assert cal.ViewObject.Proxy.getIcon().endswith("WorkCal_Calibration.svg")
+    vp = cal.ViewObject.Proxy
+    assert vp.switch.whichChild.getValue() == 0 and vp.labels.getNumChildren() == 4  # colour + B, S, X
+    assert len(cal.ViewObject.LineColorArray) == 9  # red, green, blue axes
+    flow["cal"] = cal
+    screenshot(output_dir, "04_calibrated.png")
+    screenshot(output_dir, "04_placed_model_on_reference.png",
+               only=[o for o in doc.Objects if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE]
+               + [flow["reference"], cal])
+
+
+def test_05_save_close_reopen(step, output_dir):
+    flow = step
+    doc, cal = flow["doc"], flow["cal"]
+    stored, name = cal.ResultJson, cal.Name
+    W = co.matrix_of(cal.WMatrix)
+    path = os.path.join(str(output_dir), "calibrated.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    pump()
+    doc = FreeCAD.openDocument(path)
+    pump()
+    flow["doc"] = doc
+    cal = doc.getObject(name)
+    assert co.is_calibration(cal) and cal.ResultJson == stored and cal.Status == "ok"
+    np.testing.assert_allclose(co.matrix_of(cal.Placement), W, atol=1e-9)
+    assert isinstance(cal.ViewObject.Proxy, co.ViewProviderCalibration)
+    assert "Touched" not in cal.State
+    flow["cal"] = cal
+    flow["scan_obj"], flow["workpiece"], flow["reference"] = cal.Scan, cal.Workpiece, cal.Reference
+    assert cal.Scan is not None and cal.Workpiece is not None
+    screenshot(output_dir, "05_reopened.png")
+
+
+def test_06_deviation_map_shows_the_lump(step, output_dir):
+    from workcal_wb.gui.commands.report import deviation_map
+
+    flow = step
+    doc, cal = flow["doc"], flow["cal"]
+    undo_before = doc.UndoCount
+    dev = deviation_map(doc, cal)
+    assert doc.UndoCount == undo_before + 1
+    d = np.array(dev.Deviations)
+    assert np.nanmax(d) > 1.0 and dev.Max.Value > 1.0  # the clay lump stands out
+    assert dev.WithinTolerance > 50
+    assert dev.ViewObject.DisplayMode == "Color"
+    vp = dev.ViewObject.Proxy
+    assert vp.switch.whichChild.getValue() == 0 and vp.legend.getNumChildren() > 0  # colour bar shown
+    flow["dev"] = dev
+    screenshot(output_dir, "06_deviation_map.png", only=[dev], orientation=FROM_SCANNER)
+    dev.ViewObject.Visibility = False
+    assert vp.switch.whichChild.getValue() == -1  # the legend goes with the map
+    dev.ViewObject.Visibility = True
+
+
+def _gcode_file(flow):
+    from workcal_wb.core.toolpath import format_gcode
+
+    path = os.path.join(str(flow["dir"]), "finishing.nc")
+    toolpath = sample_toolpath(flow["scene"])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(format_gcode(toolpath))
+    return path, toolpath
+
+
+def test_07_transform_and_export_toolpath(step, output_dir):
+    from workcal_wb.core.toolpath import linearised, read_gcode
+    from workcal_wb.fc.toolpath import read_toolpath
+    from workcal_wb.gui.commands.toolpath import export_toolpath, transform_toolpath
+
+    flow = step
+    doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
+    gcode, _ = _gcode_file(flow)
+    toolpath = read_gcode(gcode)
+    W = co.matrix_of(cal.WMatrix)
+    undo_before = doc.UndoCount
+    path_obj = transform_toolpath(doc, cal, gcode)
+    assert doc.UndoCount == undo_before + 1
+    moved = read_toolpath(path_obj)
+    np.testing.assert_allclose(moved.points(), frames.apply(W, linearised(toolpath).points()), atol=1e-5)
+    # Against the truth, the calibrated path lies within the tolerance of where it should be.
+    error = np.linalg.norm(moved.points() - frames.apply(scene.W, linearised(toolpath).points()), axis=1)
+    assert error.max() < 0.1
+    screenshot(output_dir, "07_toolpath_in_B.png",
+               only=[path_obj, flow["reference"]]
+               + [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE])
+
+    for fmt, ext in (("krl", ".src"), ("csv", ".csv"), ("rapid", ".mod"), ("urscript", ".script"),
+                     ("fanuc", ".ls"), ("gcode", ".nc")):
+        out = os.path.join(str(output_dir), f"program{ext}")
+        export_toolpath(cal, gcode, out, fmt)
+        assert os.path.getsize(out) > 100
+    with open(os.path.join(str(output_dir), "program.csv"), encoding="utf-8") as fh:
+        rows = [r for r in csv.reader(line for line in fh if not line.startswith("#"))]
+    header, rows = rows[0], rows[1:]
+    xyz = np.array([[float(r[header.index(k)]) for k in ("x_mm", "y_mm", "z_mm")] for r in rows])
+    np.testing.assert_allclose(xyz, frames.apply(W, linearised(toolpath).points()), atol=1e-3)
+    exported = read_gcode(os.path.join(str(output_dir), "program.nc"))
+    np.testing.assert_allclose(exported.points(), frames.apply(W, linearised(toolpath).points()), atol=1e-3)
+
+
+def test_08_failed_calibration_needs_force(step):
+    from workcal_wb.core.result import CalibrationResult
+    from workcal_wb.core.toolpath import ExportRefused
+    from workcal_wb.gui.commands.toolpath import export_toolpath, transform_toolpath
+
+    flow = step
+    doc, cal = flow["doc"], flow["cal"]
+    gcode, _ = _gcode_file(flow)
+    good = co.result_of(cal)
+    bad = CalibrationResult.from_dict({**good.to_dict(), "status": "failed", "reasons": ["test: gates failed"]})
+    inputs = co.gather_inputs(cal.Scan, cal.Workpiece, cal.Reference)
+    failed = co.make_calibration(doc, cal.Scan, cal.Workpiece, cal.Reference, result=bad, inputs=inputs,
+                                 name="FailedCalibration")
+    assert failed.Status == "failed"
+    before = object_names(doc)
+    with pytest.raises(ExportRefused):
+        transform_toolpath(doc, failed, gcode)
+    assert object_names(doc) == before
+    assert common.with_force(lambda force: transform_toolpath(doc, failed, gcode, force=force),
+                             confirm=lambda reason: False) is None
+    assert object_names(doc) == before
+    forced = common.with_force(lambda force: transform_toolpath(doc, failed, gcode, force=force),
+                               confirm=lambda reason: "failed" in reason)
+    assert "FORCED" in forced.Label
+    out = os.path.join(str(flow["dir"]), "refused.src")
+    with pytest.raises(ExportRefused):
+        export_toolpath(failed, gcode, out)
+    assert not os.path.exists(out)
+    job = common.with_force(lambda force: export_toolpath(failed, gcode, out, force=force), confirm=lambda r: True)
+    assert job.forced and "FORCED" in open(out, encoding="utf-8").read()
+    doc.removeObject(forced.Name)
+    doc.removeObject(failed.Name)
+
+
+def test_09_report_written(step, output_dir):
+    from workcal_wb.gui.commands.report import write_report
+
+    flow = step
+    paths = write_report(flow["cal"], os.path.join(str(output_dir), "report"))
+    html = open(paths["html"], encoding="utf-8").read()
+    assert "<html" in html.lower() and "OK" in html
+    assert os.path.exists(paths["json"])
+
+
+def test_10_commands_registered_and_guarded(step, output_dir):
+    flow = step
+    doc = flow["doc"]
+    commands = FreeCADGui.listCommands()
+    for name in ("WorkCal_Calibrate", "WorkCal_DeviationMap", "WorkCal_TransformToolpath", "WorkCal_ExportToolpath",
+                 "WorkCal_Report", "WorkCal_Studies", "WorkCal_Preferences"):
+        assert name in commands, name
+    # A command that fails reports and returns instead of raising into FreeCAD.
+    FreeCADGui.Selection.clearSelection()
+    empty = FreeCAD.newDocument("WorkCalEmpty")
+    try:
+        FreeCADGui.runCommand("WorkCal_DeviationMap")  # no calibration: a message, no exception
+        pump()
+        assert object_names(empty) == []
+    finally:
+        FreeCAD.closeDocument(empty.Name)
+        FreeCAD.setActiveDocument(doc.Name)
+        FreeCADGui.ActiveDocument = FreeCADGui.getDocument(doc.Name)
+    # The real command on the selected calibration: a second deviation map.
+    FreeCADGui.Selection.addSelection(flow["cal"])
+    count = len([o for o in doc.Objects if o.TypeId == "Points::FeaturePython"])
+    FreeCADGui.runCommand("WorkCal_DeviationMap")
+    pump()
+    assert len([o for o in doc.Objects if o.TypeId == "Points::FeaturePython"]) == count + 1
+
+
+def test_11_preferences_page(step):
+    from workcal_wb.fc import prefs
+    from workcal_wb.gui.commands.preferences import PreferencePage
+
+    # The page is in FreeCAD's (modal) preferences dialog: look for it from a timer, then close the dialog.
+    seen = []
+
+    def inspect_and_close():
+        for dialog in QtWidgets.QApplication.topLevelWidgets():
+            if isinstance(dialog, QtWidgets.QDialog) and dialog.isVisible():
+                page = dialog.findChild(QtWidgets.QWidget, "WorkCalPreferences")
+                seen.append(page is not None and page.findChild(QtWidgets.QDoubleSpinBox, "tolerance") is not None)
+                dialog.reject()
+
+    QtCore.QTimer.singleShot(1500, inspect_and_close)
+    FreeCADGui.runCommand("WorkCal_Preferences")  # returns when the dialog is closed
+    pump(0.1)
+    assert seen and seen[0], "the WorkCal page was not in the preferences dialog"
+
+    saved = prefs.all_values()
+    try:
+        page = PreferencePage()
+        page.loadSettings()
+        page.form.tolerance.setValue(0.25)
+        page.form.method.setCurrentIndex(page.form.method.findText("hausdorff"))
+        page.form.exportFormat.setCurrentIndex(page.form.exportFormat.findData("csv"))
+        page.saveSettings()
+        assert prefs.get("ToleranceMm") == pytest.approx(0.25)
+        assert prefs.get("Method") == "hausdorff" and prefs.get("ExportFormat") == "csv"
+        assert co.options_from().method == "hausdorff"  # what a new calibration starts with
+    finally:
+        for name, value in saved.items():
+            prefs.set(name, value)
+
+
+def test_12_double_click_reruns_with_new_options(step):
+    flow = step
+    doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
+    undo_before, before = doc.UndoCount, object_names(doc)
+    assert cal.ViewObject.Proxy.doubleClicked(cal.ViewObject)
+    panel = FreeCADGui.Control.activeDialog() and _active_panel()
+    assert panel is not None and panel.calibration == cal
+    assert panel.tolerance_box.value() == pytest.approx(cal.Tolerance.Value)
+    panel.set_options(tolerance_mm=0.4)
+    ok = task_button("ok")
+    ok.click()
+    assert panel.wait(120) == "done", panel.last_error
+    assert object_names(doc) == before and doc.UndoCount == undo_before + 1  # the same object, one undo step
+    assert cal.Tolerance.Value == pytest.approx(0.4) and co.result_of(cal).tolerance_mm == pytest.approx(0.4)
+    assert cal.Status == "ok"
+    assert_pose(co.matrix_of(cal.WMatrix), scene.W)
+    doc.undo()
+    assert cal.Tolerance.Value == pytest.approx(0.3)
+
+
+def _active_panel():
+    from workcal_wb.gui.task_panels.calibrate_panel import CalibratePanel
+
+    return CalibratePanel.current
+
+
+def test_14_study_plot_in_a_dialog(step, output_dir):
+    from workcal_wb.gui.commands.report import start_study
+
+    runner = start_study("repeatability", os.path.join(str(output_dir), "study"), n=1)
+    assert wait_for(lambda: runner.state != "running" and getattr(runner, "window", None) is not None
+                    or runner.state in ("failed", "cancelled"), 120)
+    assert runner.state == "done", runner.error
+    window = runner.window
+    assert window.dialog.isVisible() and not window.pixmap.isNull()
+    window.dialog.grab().save(os.path.join(str(output_dir), "14_study_dialog.png"))
+    window.dialog.close()

@@ -1,0 +1,109 @@
+"""WorkCal's preference page (Edit > Preferences > WorkCal) and the WorkCal_Preferences command.
+
+The page is resources/ui/preferences.ui driven by a Python class, so values are stored as plain
+strings/numbers under "User parameter:BaseApp/Preferences/Mod/WorkCal" (``workcal_wb.fc.prefs``),
+which every command reads for its defaults.  Importing this module registers the page once.
+"""
+from __future__ import annotations
+
+import os
+
+import FreeCAD
+
+import workcal_wb
+from workcal_wb.core.match import METHODS
+from workcal_wb.core.toolpath import FORMATS
+from workcal_wb.fc import prefs
+from workcal_wb.gui.task_panels.common import guarded
+
+QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
+translate = FreeCAD.Qt.translate
+
+UI_FILE = os.path.join(workcal_wb.RESOURCES, "ui", "preferences.ui")
+GROUP = "WorkCal"
+
+
+class PreferencePage:
+    """Loaded by FreeCAD's preference dialog: ``form`` plus loadSettings/saveSettings."""
+
+    def __init__(self, parent=None):
+        import FreeCADGui
+
+        self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
+        self.form.setWindowTitle(translate("WorkCal", "WorkCal"))
+        self.form.units.addItem(translate("WorkCal", "ask at the first import"), "")
+        for unit in prefs.UNITS:
+            self.form.units.addItem(unit, unit)
+        self.form.method.addItems(list(METHODS))
+        self.form.regions.addItems(list(prefs.REGION_MODES))
+        for name, module in FORMATS.items():
+            self.form.exportFormat.addItem(f"{module.NAME} ({name})", name)
+
+    def loadSettings(self):
+        values = prefs.all_values()
+        f = self.form
+        f.units.setCurrentIndex(max(0, f.units.findData(values["ScanUnits"])))
+        f.tolerance.setValue(values["ToleranceMm"])
+        f.method.setCurrentIndex(max(0, f.method.findText(values["Method"])))
+        f.regions.setCurrentIndex(max(0, f.regions.findText(values["Regions"])))
+        f.seed.setValue(values["Seed"])
+        f.resamples.setValue(values["Resamples"])
+        f.exportFormat.setCurrentIndex(max(0, f.exportFormat.findData(values["ExportFormat"])))
+        f.deviationRange.setValue(values["DeviationRangeMm"])
+        f.reportDir.setText(values["ReportDir"])
+
+    def saveSettings(self):
+        f = self.form
+        prefs.set("ScanUnits", f.units.currentData() or "")
+        prefs.set("ToleranceMm", f.tolerance.value())
+        prefs.set("Method", f.method.currentText())
+        prefs.set("Regions", f.regions.currentText())
+        prefs.set("Seed", f.seed.value())
+        prefs.set("Resamples", f.resamples.value())
+        prefs.set("ExportFormat", f.exportFormat.currentData() or "krl")
+        prefs.set("DeviationRangeMm", f.deviationRange.value())
+        prefs.set("ReportDir", f.reportDir.text().strip())
+
+
+_registered = False
+
+
+def register_page() -> None:
+    """Add the page to FreeCAD's preferences (once per session)."""
+    global _registered
+    if _registered or not FreeCAD.GuiUp:
+        return
+    import FreeCADGui
+
+    FreeCADGui.addPreferencePage(PreferencePage, GROUP)
+    _registered = True
+
+
+def show_preferences() -> None:
+    import FreeCADGui
+
+    register_page()
+    FreeCADGui.showPreferences(GROUP)
+
+
+class PreferencesCommand:
+    def GetResources(self):
+        return {
+            "Pixmap": workcal_wb.icon("WorkCal_Preferences"),
+            "MenuText": QT_TRANSLATE_NOOP("WorkCal_Preferences", "Preferences..."),
+            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_Preferences",
+                                         "Default units, tolerance, matching method and export format"),
+        }
+
+    def IsActive(self):
+        return True
+
+    @guarded("Preferences")
+    def Activated(self):
+        show_preferences()
+
+
+register_page()
+
+COMMANDS = {"WorkCal_Preferences": PreferencesCommand()}
+TOOLBAR = []  # menu only

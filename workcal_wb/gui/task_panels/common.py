@@ -1,0 +1,173 @@
+"""What the WorkCal commands share: error guard, Report view messages, choosing objects, force confirmation.
+
+Every command's ``Activated`` runs through ``guarded`` so that nothing raised inside a command reaches
+FreeCAD's event loop: a WorkCalError is a message for the user, anything else is logged as a bug.
+Interactive choices (which calibration, whether to force) go through functions that tests replace
+or bypass with the non-interactive entry points of each command module.
+"""
+from __future__ import annotations
+
+import functools
+import traceback
+
+import FreeCAD
+
+from workcal_wb.core.errors import Cancelled, WorkCalError
+
+from . import QtWidgets
+
+translate = FreeCAD.Qt.translate
+
+
+def message(text: str) -> None:
+    FreeCAD.Console.PrintMessage(f"WorkCal: {text}\n")
+
+
+def warning(text: str) -> None:
+    FreeCAD.Console.PrintWarning(f"WorkCal: {text}\n")
+
+
+def error(text: str) -> None:
+    FreeCAD.Console.PrintError(f"WorkCal: {text}\n")
+
+
+def main_window():
+    if not FreeCAD.GuiUp:
+        return None
+    import FreeCADGui
+
+    return FreeCADGui.getMainWindow()
+
+
+# Tests set this to False so that no modal box blocks the event loop; messages still reach the Report view.
+INTERACTIVE = True
+
+
+def show_error(title: str, text: str) -> None:
+    """The error in the Report view and, interactively, in a message box."""
+    error(text)
+    if INTERACTIVE and FreeCAD.GuiUp:
+        QtWidgets.QMessageBox.critical(main_window(), title, text)
+
+
+def guarded(title: str):
+    """Decorator for Command.Activated: report errors instead of letting them escape into FreeCAD."""
+
+    def wrap(func):
+        @functools.wraps(func)
+        def run(*args, **kwargs):
+            try:
+                return func(*args, **kwargs)
+            except Cancelled:
+                message(translate("WorkCal", "{} cancelled").format(title))
+            except WorkCalError as exc:
+                show_error(title, str(exc))
+            except Exception as exc:  # a bug: full traceback in the Report view, FreeCAD keeps running
+                error(f"{title}: unexpected error: {exc}\n{traceback.format_exc()}")
+                if INTERACTIVE and FreeCAD.GuiUp:
+                    QtWidgets.QMessageBox.critical(main_window(), title, f"{exc}\n\n(see the Report view)")
+            return None
+
+        return run
+
+    return wrap
+
+
+def active_document():
+    doc = FreeCAD.ActiveDocument
+    if doc is None:
+        raise WorkCalError(translate("WorkCal", "no document open"))
+    return doc
+
+
+def selected_objects() -> list:
+    if not FreeCAD.GuiUp:
+        return []
+    import FreeCADGui
+
+    return list(FreeCADGui.Selection.getSelection())
+
+
+def calibration_for(doc, required_ok: bool = False):
+    """The calibration the user means: the selected one, or the only/most recent one in the document."""
+    from workcal_wb.fc.calibration_object import find_calibrations, is_calibration
+
+    for obj in selected_objects():
+        if is_calibration(obj):
+            return obj
+        for linked in getattr(obj, "OutList", []):  # e.g. a deviation map selected
+            if is_calibration(linked):
+                return linked
+    found = find_calibrations(doc)
+    if not found:
+        raise WorkCalError(translate("WorkCal", "no calibration in the document: run WorkCal > Calibrate first"))
+    return found[-1]
+
+
+def confirm_force(reason: str) -> bool:
+    """Ask whether to go on with a calibration that did not pass its gates (False when not interactive)."""
+    if not (INTERACTIVE and FreeCAD.GuiUp):
+        return False
+    box = QtWidgets.QMessageBox(main_window())
+    box.setIcon(QtWidgets.QMessageBox.Warning)
+    box.setWindowTitle(translate("WorkCal", "Calibration not ok"))
+    box.setText(translate("WorkCal", "The calibration did not pass its quality gates."))
+    box.setInformativeText(reason + "\n\n" + translate(
+        "WorkCal", "Use it anyway? The result is marked FORCED; check the workpiece position by hand before "
+                   "running the program."))
+    box.setStandardButtons(QtWidgets.QMessageBox.Yes | QtWidgets.QMessageBox.No)
+    box.setDefaultButton(QtWidgets.QMessageBox.No)
+    return box.exec_() == QtWidgets.QMessageBox.Yes
+
+
+def with_force(action, confirm=None):
+    """Run ``action(force=False)``; when the calibration is refused, ask ``confirm(reason)`` (default:
+    a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result or None."""
+    from workcal_wb.core.toolpath import ExportRefused
+
+    try:
+        return action(force=False)
+    except ExportRefused as exc:
+        if "status is" not in str(exc):  # envelope or non-finite numbers: forcing does not help
+            raise
+        if not (confirm or confirm_force)(str(exc)):
+            warning(str(exc))
+            return None
+    warning(translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))
+    return action(force=True)
+
+
+def transaction(doc, title: str):
+    """Context manager: one undo step, aborted when the body raises."""
+    from contextlib import contextmanager
+
+    @contextmanager
+    def manager():
+        opened = bool(getattr(doc, "UndoMode", 0))
+        if opened:
+            doc.openTransaction(title)
+        try:
+            yield
+        except BaseException:
+            if opened:
+                doc.abortTransaction()
+            raise
+        if opened:
+            doc.commitTransaction()
+
+    return manager()
+
+
+def process_events(seconds: float = 0.0) -> None:
+    """Let the event loop run (for waiting in tests and scripts without blocking the window)."""
+    import time
+
+    from . import QtCore
+
+    app = QtWidgets.QApplication.instance()
+    end = time.monotonic() + seconds
+    while True:
+        app.processEvents(QtCore.QEventLoop.AllEvents, 50)
+        if time.monotonic() >= end:
+            break
+        time.sleep(0.01)
