@@ -39,7 +39,7 @@ def _paths(obj) -> list:
 def _gcode_line(command) -> str:
     """One command as G-code in mm and mm/min (fixed-point: the reader takes no exponents).
 
-    A/B words are read as WorkCal's own tool-axis angles (what ``make_path_object`` writes); C is refused."""
+    A/B words are read as WorkCal's tool-axis angles (as the G-code exporter writes them); C is refused."""
     if command.Name.startswith("("):
         return command.Name
     words = [f"{k}{v * SECONDS_PER_MINUTE if k == 'F' else v:.9f}" for k, v in command.Parameters.items()]
@@ -64,14 +64,17 @@ def _matrix(T) -> "FreeCAD.Matrix":
 def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
                      envelope: Envelope | None = None, table: RotaryTable | None = None,
                      chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, name: str = "WorkCalPath"):
-    """A ``Path::Feature`` holding ``toolpath`` moved into B, after the same checks as a file export."""
+    """A ``Path::Feature`` holding ``toolpath`` moved into B, after the same checks as a file export.
+
+    Positions only: FreeCAD's Path treats A/B words as rotary axes and would draw the path displaced,
+    so the tool axis (in every exported program) is not written into the Path object."""
     T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
                                   chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
     moved = transformed(toolpath, T, chord_tol_mm)
     header = (forced_banner(calibration) if forced else []) + moved.header
     commands = [Path.Command(f"({c})") for c in header]
     for block in blocks(moved):
-        params = {k: v / SECONDS_PER_MINUTE if k == "F" else v for k, v in block.words.items()}
+        params = {k: v / SECONDS_PER_MINUTE if k == "F" else v for k, v in block.words.items() if k not in "AB"}
         commands += [Path.Command(f"({c})") for c in block.comments] + [Path.Command(block.code, params)]
     commands += [Path.Command(f"({c})") for c in moved.footer]
     obj = doc.addObject("Path::Feature", name)
