@@ -11,7 +11,7 @@ import sys
 
 from workcal_wb import __version__
 
-SUBCOMMANDS = ("demo", "calibrate", "toolpath", "simulate", "study")  # module names in workcal_wb.cli, in the order --help lists them
+SUBCOMMANDS = ("demo", "calibrate", "toolpath", "simulate", "study", "match", "bench")  # module names in workcal_wb.cli, in the order --help lists them
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.core import frames
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
@@ -108,7 +107,7 @@ def run(args) -> int:
     result.to_json(out / "result.json")
     workpiece_points = merged.points[result.regions["workpiece"]] if result.regions.get("workpiece") else None
     report = write_report(result, out, workpiece_points=workpiece_points, workpiece_model=workpiece)
-    print(summary(result))
+    print(result.summary())
     print(f"wrote {out / 'result.json'}, {report['html']}")
     if toolpath is not None and result.W is None:
         print("workcal calibrate: toolpath not written: the calibration found no W", file=sys.stderr)
@@ -121,22 +120,3 @@ def run(args) -> int:
             print(f"workcal calibrate: toolpath not written: {exc}", file=sys.stderr)
     return EXIT_OK if result.W is not None and result.status != "failed" else EXIT_FAILED
 
-
-def summary(result) -> str:
-    """W, its angles and the quality in a few lines."""
-    lines = [f"calibration {result.status.upper()} in {result.time_s:.2f} s"]
-    lines += [f"  reason: {r}" for r in result.reasons]
-    if result.W is not None:
-        phi, theta, psi = frames.euler_zyz(result.W)
-        lines.append("W = ^B X (workpiece frame in the robot base frame, mm):")
-        lines += ["  " + " ".join(f"{v:12.5f}" for v in row) for row in result.W]
-        lines.append(f"  Euler ZYZ {phi:.4f} {theta:.4f} {psi:.4f} deg, Omega {frames.omega(result.W):.4f} deg")
-    for role, m in (("workpiece", result.workpiece), ("reference", result.reference)):
-        if m is not None and m.matrix is not None:
-            lines.append(f"  {role}: {m.status}, RMS {m.rms_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
-                         f"{m.tolerance_mm} mm, {m.n_inliers} points")
-    for key, value in result.uncertainty.items():
-        if key.endswith("_mm") or key.endswith("_deg"):
-            lines.append(f"  uncertainty {key}: {value:.4f}")
-    lines += [f"  warning: {w}" for w in result.warnings]
-    return "\n".join(lines)

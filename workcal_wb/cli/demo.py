@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.calibrate import summary
 from workcal_wb.cli.simulate import write_simulation
 from workcal_wb.core import frames
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
@@ -54,7 +53,7 @@ def run(args) -> int:
     region = result.regions.get("workpiece")
     report = write_report(result, out, workpiece_points=scan.points[region] if region else None,
                           workpiece_model=workpiece, title="WorkCal demo: sample scene")
-    print(summary(result))
+    print(result.summary())
 
     written = []
     for fmt, name in PROGRAMS.items():

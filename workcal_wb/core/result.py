@@ -133,6 +133,27 @@ class CalibrationResult:
     def ok(self) -> bool:
         return self.status == OK
 
+    def summary(self) -> str:
+        """W, its angles, both matches and the uncertainty in a few lines (terminal, Report view)."""
+        lines = [f"calibration {self.status.upper()} in {self.time_s:.2f} s"]
+        lines += [f"  reason: {r}" for r in self.reasons]
+        if self.W is not None:
+            phi, theta, psi = frames.euler_zyz(self.W)
+            lines.append("W = ^B X (workpiece frame in the robot base frame, mm):")
+            lines += ["  " + " ".join(f"{v:12.5f}" for v in row) for row in self.W]
+            lines.append(f"  Euler ZYZ {phi:.4f} {theta:.4f} {psi:.4f} deg, Omega {frames.omega(self.W):.4f} deg")
+        for role, m in (("workpiece", self.workpiece), ("reference", self.reference)):
+            if m is not None and m.matrix is not None:
+                lines.append(f"  {role}: {m.status}, RMS {m.rms_mm:.3f} mm, mean Hausdorff "
+                             f"{m.mean_directed_hausdorff_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
+                             f"{m.tolerance_mm} mm, {m.n_inliers} points")
+        for key, words in (("toolpath_bound_mm", "at the toolpath"), ("surface_bound_mm", "at the workpiece surface")):
+            if key in self.uncertainty:
+                lines.append(f"  uncertainty {words}: {self.uncertainty[key]:.4f} mm "
+                             f"(tolerance {self.tolerance_mm} mm)")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
     def to_dict(self) -> dict:
         out = {"format": "workcal-calibration", "version": 1, "units": {"length": "mm", "angle": "deg"}}
         for f in fields(self):

@@ -361,30 +361,9 @@ def _error_result(message: str, options: CalibrationOptions | None) -> Calibrati
                              tolerance_mm=options.tolerance_mm if options else prefs.get("ToleranceMm"))
 
 
-def summary(result: CalibrationResult, label: str = "Calibration") -> str:
-    """Lines for the Report view."""
-    lines = [f"WorkCal: {label}: status {result.status.upper()} ({result.time_s:.1f} s)"]
-    if result.W is not None:
-        phi, theta, psi = frames.euler_zyz(result.W)
-        t = result.W[:3, 3]
-        lines.append(f"  W = ^B X: Euler ZYZ {phi:.4f} {theta:.4f} {psi:.4f} deg, "
-                     f"Omega {frames.omega(result.W):.4f} deg, translation {t[0]:.3f} {t[1]:.3f} {t[2]:.3f} mm")
-    for role, match in (("workpiece", result.workpiece), ("reference", result.reference)):
-        if match is not None and np.isfinite(match.rms_mm):
-            lines.append(f"  {role}: RMS {match.rms_mm:.3f} mm, "
-                         f"mean Hausdorff {match.mean_directed_hausdorff_mm:.3f} mm, "
-                         f"{match.within_tolerance_pct:.1f}% within {match.tolerance_mm} mm")
-    u = result.uncertainty or {}
-    for key, words in (("toolpath_bound_mm", "at the toolpath"), ("surface_bound_mm", "at the workpiece surface")):
-        if key in u:
-            lines.append(f"  uncertainty {words}: {u[key]:.3f} mm (tolerance {result.tolerance_mm} mm)")
-    lines += [f"  reason: {r}" for r in result.reasons] + [f"  warning: {w}" for w in result.warnings]
-    return "\n".join(lines)
-
-
 def report(result: CalibrationResult, label: str = "Calibration") -> None:
     """The summary in the Report view: a message when ok, a warning otherwise."""
-    (log if result.status == OK else warn)(summary(result, label))
+    (log if result.status == OK else warn)(f"WorkCal: {label}: {result.summary()}")
 
 
 def _triad(T: np.ndarray, size: float):

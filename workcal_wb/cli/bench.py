@@ -1,0 +1,37 @@
+"""``workcal bench``: WorkCal's matcher against stock Open3D on real and simulated scans; writes a Markdown table."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+
+# The shared data (Stanford bunny scans) lives beside the checkout, as for the tests.
+DEFAULT_SHARED = Path(__file__).resolve().parents[2].parent / "shared"
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "bench", help="benchmark the matcher against stock Open3D and write the table (docs/benchmarks.md)",
+        description="Match the benchmark cases (Stanford bunny scans with noise, partial overlap, clutter and clay "
+                    "changes; simulated scans with exact truth; one scan of about 2 million points) with WorkCal and "
+                    "with Open3D's tutorial pipeline in the same run, and write success rates, errors, times, "
+                    "peak memory and the time ratio as Markdown. Exit status 1 when WorkCal misses a target.")
+    p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
+    p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
+    p.add_argument("--seed", type=int, default=0, help="seed for the case generation and the matchers")
+    p.add_argument("--shared", metavar="DIR", type=Path,
+                   default=Path(os.environ.get("WORKCAL_SHARED", DEFAULT_SHARED)),
+                   help="folder holding data/stanford-bunny (default ../shared beside the checkout, or "
+                        "$WORKCAL_SHARED); the bunny cases are skipped with a note when it is absent")
+    return p
+
+
+def run(args) -> int:
+    from workcal_wb.core.benchmark.run import run as run_benchmark
+
+    report = run_benchmark(args.shared, Path(args.out), seed=args.seed, quick=args.quick)
+    print(f"wrote {args.out}")
+    for line in report.missed:
+        print(f"target missed: {line}")
+    return EXIT_FAILED if report.missed else EXIT_OK
