@@ -12,6 +12,8 @@ from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc.models import add_model  # noqa: E402
+from workcal_wb.fc.placements import matrix_of as matrix  # noqa: E402
 
 ROT_TOL_DEG, TRANS_TOL_MM = 0.05, 0.1
 SEED = 0  # calibration seed (the default)
@@ -23,15 +25,6 @@ def simulated():
     scene = build_scene("car", seed=0, clay_change=["lump"])
     scan = Scanner.aimed_at(scene).scan(scene)
     return scene, scan
-
-
-def add_mesh(doc, cloud: Cloud, name: str):
-    import Mesh
-
-    vectors = [FreeCAD.Vector(*p) for p in cloud.points.tolist()]
-    obj = doc.addObject("Mesh::Feature", name)
-    obj.Mesh = Mesh.Mesh((vectors, [tuple(int(i) for i in t) for t in cloud.triangles.tolist()]))
-    return obj
 
 
 def add_scan(doc, points: np.ndarray, name: str = "Scan"):
@@ -47,18 +40,14 @@ def document(simulated, tmp_path):
     doc = FreeCAD.newDocument("WorkCalCalibrationTest")
     objects = {
         "scan": add_scan(doc, scan.points),
-        "workpiece": add_mesh(doc, scene.workpiece_model(), "Workpiece"),
-        "reference": add_mesh(doc, scene.reference_model(), "Reference"),
+        "workpiece": add_model(doc, scene.workpiece_model(), "Workpiece"),
+        "reference": add_model(doc, scene.reference_model(), "Reference"),
     }
     doc.recompute()
     name = doc.Name
     yield doc, objects
     if name in FreeCAD.listDocuments():
         FreeCAD.closeDocument(name)
-
-
-def matrix(value):
-    return co.matrix_of(value)
 
 
 def assert_pose(T, truth, rot_tol=ROT_TOL_DEG, trans_tol=TRANS_TOL_MM):

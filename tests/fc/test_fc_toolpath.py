@@ -9,6 +9,7 @@ from workcal_wb.core.errors import InputError  # noqa: E402
 from workcal_wb.core.result import CalibrationResult  # noqa: E402
 from workcal_wb.core.toolpath import ExportRefused, linearised, transformed  # noqa: E402
 from workcal_wb.fc import toolpath as fctp  # noqa: E402
+from workcal_wb.fc.placements import matrix_of  # noqa: E402
 
 TURNED = frames.rigid(frames.rot_z(30.0), (600.0, -50.0, 120.0))  # keeps the XY arcs of a Profile
 TILTED = frames.from_euler_zyz(40.0, 20.0, -10.0, (800.0, 100.0, 50.0))
@@ -43,10 +44,6 @@ def job():
     doc.recompute()
     yield job
     FreeCAD.closeDocument(doc.Name)
-
-
-def placement_matrix(placement):
-    return np.array(placement.toMatrix().A).reshape(4, 4)
 
 
 def test_read_job_follows_its_commands_with_feeds_in_mm_per_min(job):
@@ -115,7 +112,7 @@ def test_robot_trajectory_waypoints(job):
     assert len(waypoints) == len(moves)
     expected_points = frames.apply(TILTED, np.array([m.end for m in moves]))
     for wp, move, p in zip(waypoints, moves, expected_points):
-        pose = placement_matrix(wp.Pos)
+        pose = matrix_of(wp.Pos)
         np.testing.assert_allclose(pose[:3, 3], p, atol=1e-6)
         np.testing.assert_allclose(pose[:3, 2], -TILTED[:3, 2], atol=1e-9)  # tool Z along the approach
         assert wp.Type == "LIN"

@@ -9,7 +9,6 @@
 Message boxes are off (``task_panels.common.INTERACTIVE = False``) so no modal dialog blocks a test;
 messages still reach the Report view, which is where tests read them.
 """
-import time
 from pathlib import Path
 
 import pytest
@@ -20,20 +19,14 @@ if not FreeCAD.GuiUp:  # pragma: no cover - these tests need the GUI
 else:
     import FreeCADGui
 
-    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets, common
 
 SHOT_SIZE = (1000, 750)
 
 
 def pump(seconds: float = 0.05) -> None:
     """Process events for ``seconds`` (at least once)."""
-    app = QtWidgets.QApplication.instance()
-    end = time.monotonic() + seconds
-    while True:
-        app.processEvents(QtCore.QEventLoop.AllEvents, 20)
-        if time.monotonic() >= end:
-            break
-        time.sleep(0.005)
+    common.process_events(seconds)
 
 
 @pytest.fixture(name="pump")
@@ -43,8 +36,6 @@ def pump_fixture():
 
 @pytest.fixture(autouse=True)
 def non_interactive():
-    from workcal_wb.gui.task_panels import common
-
     before = common.INTERACTIVE
     common.INTERACTIVE = False
     yield

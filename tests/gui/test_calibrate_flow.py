@@ -24,6 +24,8 @@ from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc.models import add_model  # noqa: E402
+from workcal_wb.fc.placements import matrix_of  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtWidgets  # noqa: E402
 from workcal_wb.gui.task_panels import common  # noqa: E402
 
@@ -96,15 +98,6 @@ def screenshot(output_dir, name, only=None, orientation=None):
     return path
 
 
-def add_mesh(doc, cloud: Cloud, name: str):
-    import Mesh
-
-    obj = doc.addObject("Mesh::Feature", name)
-    obj.Mesh = Mesh.Mesh(([FreeCAD.Vector(*p) for p in cloud.points.tolist()],
-                          [tuple(int(i) for i in t) for t in cloud.triangles.tolist()]))
-    return obj
-
-
 def object_names(doc):
     return sorted(o.Name for o in doc.Objects)
 
@@ -143,8 +136,8 @@ def test_01_import_simulated_scene(step, workbench, output_dir):
     flow["doc"] = doc
     scene, scan = flow["scene"], flow["scan"]
     flow["scan_obj"] = make_scan(doc, Cloud(scan.points, name="scene scan"), "Scan", "mm", "simulated scan")
-    flow["workpiece"] = add_mesh(doc, scene.workpiece_model(), "Workpiece")
-    flow["reference"] = add_mesh(doc, scene.reference_model(), "Reference")
+    flow["workpiece"] = add_model(doc, scene.workpiece_model(), "Workpiece")
+    flow["reference"] = add_model(doc, scene.reference_model(), "Reference")
     set_setup(doc, scan=flow["scan_obj"], workpiece=flow["workpiece"], reference=flow["reference"])
     doc.recompute()
     assert flow["scan_obj"].Points.CountPoints == len(scan.points)
@@ -227,9 +220,9 @@ def test_04_calibrate_through_the_task_panel(step, output_dir):
     assert max(progress_seen) > 0  # the status-bar progress bar moved
     cal = panel.created
     assert co.is_calibration(cal) and cal.Status == "ok", cal.Reasons
-    assert_pose(co.matrix_of(cal.WMatrix), scene.W)
-    assert_pose(co.matrix_of(cal.UMatrix), flow["scan"].U)
-    assert_pose(co.matrix_of(cal.VMatrix), flow["scan"].V)
+    assert_pose(matrix_of(cal.WMatrix), scene.W)
+    assert_pose(matrix_of(cal.UMatrix), flow["scan"].U)
+    assert_pose(matrix_of(cal.VMatrix), flow["scan"].V)
     # One undo step adds the calibration and the placed model; undo removes both, redo brings them back.
     assert doc.UndoCount == undo_before + 1
     added = sorted(set(object_names(doc)) - set(before))
@@ -255,7 +248,7 @@ def test_05_save_close_reopen(step, output_dir):
     flow = step
     doc, cal = flow["doc"], flow["cal"]
     stored, name = cal.ResultJson, cal.Name
-    W = co.matrix_of(cal.WMatrix)
+    W = matrix_of(cal.WMatrix)
     path = os.path.join(str(output_dir), "calibrated.FCStd")
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
@@ -265,7 +258,7 @@ def test_05_save_close_reopen(step, output_dir):
     flow["doc"] = doc
     cal = doc.getObject(name)
     assert co.is_calibration(cal) and cal.ResultJson == stored and cal.Status == "ok"
-    np.testing.assert_allclose(co.matrix_of(cal.Placement), W, atol=1e-9)
+    np.testing.assert_allclose(matrix_of(cal.Placement), W, atol=1e-9)
     assert isinstance(cal.ViewObject.Proxy, co.ViewProviderCalibration)
     assert "Touched" not in cal.State
     flow["cal"] = cal
@@ -314,7 +307,7 @@ def test_07_transform_and_export_toolpath(step, output_dir):
     doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
     gcode, _ = _gcode_file(flow)
     toolpath = read_gcode(gcode)
-    W = co.matrix_of(cal.WMatrix)
+    W = matrix_of(cal.WMatrix)
     undo_before = doc.UndoCount
     path_obj = transform_toolpath(doc, cal, gcode)
     assert doc.UndoCount == undo_before + 1
@@ -461,7 +454,7 @@ def test_12_double_click_reruns_with_new_options(step):
     assert object_names(doc) == before and doc.UndoCount == undo_before + 1  # the same object, one undo step
     assert cal.Tolerance.Value == pytest.approx(0.4) and co.result_of(cal).tolerance_mm == pytest.approx(0.4)
     assert cal.Status == "ok"
-    assert_pose(co.matrix_of(cal.WMatrix), scene.W)
+    assert_pose(matrix_of(cal.WMatrix), scene.W)
     doc.undo()
     assert cal.Tolerance.Value == pytest.approx(0.3)
 

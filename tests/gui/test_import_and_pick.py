@@ -20,6 +20,7 @@ from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.writers import write_ply, write_xyz  # noqa: E402
 from workcal_wb.fc import scan as fc_scan  # noqa: E402
+from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc import setup as fc_setup  # noqa: E402
 from workcal_wb.gui import region_display  # noqa: E402
 from workcal_wb.gui.commands import import_scan, models, regions  # noqa: E402
@@ -139,13 +140,6 @@ def shown_matches_regions(obj):
             assert role not in shown
         else:
             np.testing.assert_allclose(shown[role], points[idx], atol=1e-3)
-
-
-def add_mesh(doc, cloud, name):
-    obj = doc.addObject("Mesh::Feature", name)
-    obj.Mesh = Mesh.Mesh(([FreeCAD.Vector(*p) for p in cloud.points.tolist()],
-                          [tuple(t) for t in cloud.triangles.tolist()]))
-    return obj
 
 
 def doc_state(doc):
@@ -362,8 +356,8 @@ def test_regions_survive_save_and_reopen(imported, scene, view_driver, output_di
 
 def test_choose_models_panel_and_automatic_regions(imported, scene, shoot, report, output_dir, pump):
     doc = imported.Document
-    workpiece = add_mesh(doc, scene["scene"].workpiece_model(), "CarModel")
-    reference = add_mesh(doc, scene["scene"].reference_model(), "ReferenceModel")
+    workpiece = add_model(doc, scene["scene"].workpiece_model(), "CarModel")
+    reference = add_model(doc, scene["scene"].reference_model(), "ReferenceModel")
     doc.recompute()
     panel = models.open_panel(doc)
     assert panel.selected()["scan"] is imported  # the import made it the scan

@@ -13,8 +13,8 @@ calibration (or takes a result computed elsewhere, e.g. by the GUI's worker thre
   residuals, the uncertainty bounds, status, warnings and reasons, and the whole CalibrationResult
   as JSON (hidden ``ResultJson``) for the exporters: ``result_of(obj)`` gives it back.
 
-The proxy keeps no state worth saving (``__getstate__`` returns a small dict), so documents reopen
-without WorkCal having to rebuild anything.
+The proxy keeps no state worth saving (see ``fc.proxies``), so documents reopen without WorkCal
+having to rebuild anything.
 """
 from __future__ import annotations
 
@@ -27,7 +27,6 @@ import numpy as np
 
 import FreeCAD
 
-import workcal_wb
 from workcal_wb.core import frames
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.errors import InputError, WorkCalError
@@ -35,6 +34,9 @@ from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.result import FAILED, OK, CalibrationResult
 from workcal_wb.fc import prefs
+from workcal_wb.fc.placements import freecad_matrix, placement
+from workcal_wb.fc.proxies import Feature, ViewProvider
+from workcal_wb.fc.undo import transaction
 
 translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
@@ -201,22 +203,6 @@ def run(inputs: Inputs, progress=None) -> CalibrationResult:
 
 # ------------------------------------------------------------------------------------- the object
 
-def _matrix(T) -> "FreeCAD.Matrix":
-    return FreeCAD.Matrix(*[float(v) for v in np.asarray(T, dtype=float).reshape(-1)])
-
-
-def placement(T) -> "FreeCAD.Placement":
-    """A FreeCAD Placement from a 4x4 rigid transform."""
-    return FreeCAD.Placement(_matrix(T))
-
-
-def matrix_of(value) -> np.ndarray:
-    """4x4 numpy array of a FreeCAD Placement or Matrix."""
-    if hasattr(value, "toMatrix"):
-        value = value.toMatrix()
-    return np.array(value.A, dtype=float).reshape(4, 4)
-
-
 # (type, name, group, tooltip); outputs are read-only in the property editor.
 INPUT_PROPERTIES = [
     ("App::PropertyLink", "Scan", "Inputs", "The scene scan (points in the scanner frame S)"),
@@ -317,7 +303,7 @@ def find_calibrations(doc) -> list:
 def _set_frame(obj, name: str, T) -> None:
     M = np.eye(4) if T is None else np.asarray(T, dtype=float)
     setattr(obj, name, placement(M))
-    setattr(obj, f"{name}Matrix", _matrix(M))
+    setattr(obj, f"{name}Matrix", freecad_matrix(M))
     if T is None:
         setattr(obj, f"{name}EulerZYZ", FreeCAD.Vector(0, 0, 0))
         setattr(obj, f"{name}Omega", 0.0)
@@ -398,12 +384,10 @@ def frame_poses(result: CalibrationResult) -> dict:
     return out
 
 
-class CalibrationFeature:
+class CalibrationFeature(Feature):
     """Proxy of the calibration object (``Part::FeaturePython``)."""
 
-    def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
+    STATE = {"type": "WorkCalCalibration", "version": 1}
 
     def setup(self, obj) -> None:
         _add_properties(obj)
@@ -421,24 +405,6 @@ class CalibrationFeature:
         if not obj.Status:
             obj.ShowFrames = True
             obj.Status = "new"
-
-    # FreeCAD 0.20 saves proxies through __getstate__/__setstate__, 1.x through dumps/loads.
-    def __getstate__(self):
-        return {"type": "WorkCalCalibration", "version": 1}
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
-
-    def onDocumentRestored(self, obj):
-        self.setup(obj)  # adds properties introduced by newer WorkCal versions
-        # Restoring dynamic properties marks the object touched; its stored result is still valid.
-        obj.purgeTouched()
 
     def execute(self, obj):
         prepared, self._prepared = getattr(self, "_prepared", None), None
@@ -491,14 +457,6 @@ class CalibrationFeature:
 
 # --------------------------------------------------------------------------------- create / update
 
-def _transaction(doc, title: str):
-    """Open an undo transaction when the document records undo; returns whether one was opened."""
-    if getattr(doc, "UndoMode", 0):
-        doc.openTransaction(title)
-        return True
-    return False
-
-
 def make_calibration(doc, scan, workpiece, reference, *, tolerance_mm=None, method=None, seed=None,
                      resamples=None, regions: str | None = None, toolpath=None,
                      result: CalibrationResult | None = None, inputs: Inputs | None = None, progress=None,
@@ -516,11 +474,8 @@ def make_calibration(doc, scan, workpiece, reference, *, tolerance_mm=None, meth
                                regions=regions or prefs.get("Regions"), toolpath=toolpath)
     if result is None:
         result = run(inputs, progress)
-    opened = _transaction(doc, translate("WorkCal", "WorkCal calibration"))
-    obj = created = None
-    try:
+    with transaction(doc, translate("WorkCal", "WorkCal calibration")):
         obj = doc.addObject("Part::FeaturePython", name)
-        created = obj.Name
         CalibrationFeature(obj)
         obj.Label = name
         _write_inputs(obj, scan, workpiece, reference, toolpath, inputs, regions)
@@ -531,22 +486,8 @@ def make_calibration(doc, scan, workpiece, reference, *, tolerance_mm=None, meth
         if placed_model and result.W is not None:
             show_placed_model(obj)
         doc.recompute()
-    except BaseException:
-        _undo_creation(doc, opened, created)
-        raise
-    if opened:
-        doc.commitTransaction()
     report(result, obj.Label)
     return obj
-
-
-def _undo_creation(doc, opened: bool, name: str | None) -> None:
-    """Leave the document as it was after a failed creation (the aborted transaction may already
-    have removed the object)."""
-    if opened:
-        doc.abortTransaction()
-    if name is not None and doc.getObject(name) is not None:
-        doc.removeObject(name)
 
 
 def _write_inputs(obj, scan, workpiece, reference, toolpath, inputs: Inputs, regions) -> None:
@@ -566,19 +507,12 @@ def update_calibration(obj, result: CalibrationResult, inputs: Inputs, regions: 
     """Store a result computed elsewhere (e.g. re-run from the task panel) on an existing object,
     with the options it was computed with, in one undo step."""
     doc = obj.Document
-    opened = _transaction(doc, translate("WorkCal", "WorkCal calibration"))
-    try:
+    with transaction(doc, translate("WorkCal", "WorkCal calibration")):
         toolpath = obj.Toolpath if obj.Toolpath is not None else (obj.ToolpathFile or None)
         _write_inputs(obj, obj.Scan, obj.Workpiece, obj.Reference, toolpath, inputs, regions or obj.Regions)
         obj.Proxy._prepared = (inputs.key(), inputs, result)
         obj.touch()
         doc.recompute()
-    except BaseException:
-        if opened:
-            doc.abortTransaction()
-        raise
-    if opened:
-        doc.commitTransaction()
     report(result, obj.Label)
 
 
@@ -605,31 +539,15 @@ def show_placed_model(obj):
 
 # ------------------------------------------------------------------------------------------- view
 
-class ViewProviderCalibration:
+class ViewProviderCalibration(ViewProvider):
     """Icon, coloured triads with frame labels, double-click opens the calibrate task panel."""
 
-    def __init__(self, vobj):
-        vobj.Proxy = self
-
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
-
-    def getIcon(self):
-        return workcal_wb.icon("WorkCal_Calibration")
+    ICON = "WorkCal_Calibration"
 
     def attach(self, vobj):
         from pivy import coin
 
-        self.Object = vobj.Object
+        super().attach(vobj)
         # Frame names, outside the display-mode switch: shown and hidden with the object by hand.
         self.switch = coin.SoSwitch()
         self.labels = coin.SoSeparator()
@@ -717,11 +635,9 @@ class ViewProviderCalibration:
 def _placed_model_action(obj):
     try:
         doc = obj.Document
-        opened = _transaction(doc, translate("WorkCal", "Show placed workpiece model"))
-        show_placed_model(obj)
-        doc.recompute()
-        if opened:
-            doc.commitTransaction()
+        with transaction(doc, translate("WorkCal", "Show placed workpiece model")):
+            show_placed_model(obj)
+            doc.recompute()
     except WorkCalError as exc:
         error(f"WorkCal: {exc}")
 

@@ -15,12 +15,12 @@ import numpy as np
 
 import FreeCAD
 
-import workcal_wb
 from workcal_wb.core.deviation import deviation_stats, signed_deviations
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.fc import prefs
-from workcal_wb.fc.calibration_object import (_model_cloud, _scan_cloud, _transaction, _undo_creation, error,
-                                              is_calibration, log, result_of)
+from workcal_wb.fc.calibration_object import _model_cloud, _scan_cloud, error, is_calibration, log, result_of
+from workcal_wb.fc.proxies import Feature, ViewProvider
+from workcal_wb.fc.undo import transaction
 
 translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
@@ -109,12 +109,10 @@ def compute(calibration) -> dict:
             "stats": deviation_stats(deviations, result.tolerance_mm)}
 
 
-class DeviationFeature:
+class DeviationFeature(Feature):
     """Proxy of the deviation map (``Points::FeaturePython``)."""
 
-    def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
+    STATE = {"type": ROLE, "version": 1}
 
     def setup(self, obj):
         for kind, name, group, tip in PROPERTIES:
@@ -127,22 +125,6 @@ class DeviationFeature:
         for name in HIDDEN:
             obj.setEditorMode(name, 2)
         obj.WorkCalRole = ROLE
-
-    def __getstate__(self):
-        return {"type": ROLE, "version": 1}
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
-
-    def onDocumentRestored(self, obj):
-        self.setup(obj)
-        obj.purgeTouched()  # restoring dynamic properties touches; the stored map is still valid
 
     def execute(self, obj):
         import Points
@@ -175,11 +157,8 @@ def make_deviation_map(doc, calibration, *, range_mm: float | None = None, name:
     if not is_calibration(calibration):
         raise InputError(f"{getattr(calibration, 'Label', calibration)}: not a WorkCal calibration")
     compute(calibration)  # fail before touching the document
-    opened = _transaction(doc, translate("WorkCal", "WorkCal deviation map"))
-    obj = created = None
-    try:
+    with transaction(doc, translate("WorkCal", "WorkCal deviation map")):
         obj = doc.addObject("Points::FeaturePython", name)
-        created = obj.Name
         DeviationFeature(obj)
         obj.Label = f"{name} ({calibration.Label})"
         obj.Calibration = calibration
@@ -191,11 +170,6 @@ def make_deviation_map(doc, calibration, *, range_mm: float | None = None, name:
         if obj.isValid() is False or not obj.Deviations:
             raise InputError(f"{calibration.Label}: the deviation map could not be computed (see the Report view)")
         doc.recompute()
-    except BaseException:
-        _undo_creation(doc, opened, created)
-        raise
-    if opened:
-        doc.commitTransaction()
     if FreeCAD.GuiUp:
         obj.ViewObject.DisplayMode = "Color"
         if hide_scan and calibration.Scan is not None:
@@ -215,30 +189,16 @@ def legend_ticks(range_mm: float) -> list:
     return [range_mm, range_mm / 2, 0.0, -range_mm / 2, -range_mm]
 
 
-class ViewProviderDeviation:
+class ViewProviderDeviation(ViewProvider):
     """Colour display mode, larger points, and a colour bar overlay while visible."""
 
+    ICON = "WorkCal_DeviationMap"
     BAR_X = (0.74, 0.79)  # normalised device coordinates of the bar (-1..1)
     BAR_Y = (-0.7, 0.7)
 
     def __init__(self, vobj):
-        vobj.Proxy = self
+        super().__init__(vobj)
         vobj.PointSize = 3.0
-
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        return self.__setstate__(state)
-
-    def getIcon(self):
-        return workcal_wb.icon("WorkCal_DeviationMap")
 
     def getDefaultDisplayMode(self):
         return "Color"
@@ -246,7 +206,7 @@ class ViewProviderDeviation:
     def attach(self, vobj):
         from pivy import coin
 
-        self.Object = vobj.Object
+        super().attach(vobj)
         self.switch = coin.SoSwitch()
         self.legend = coin.SoAnnotation()  # drawn last, over the scene
         self.switch.addChild(self.legend)

@@ -16,6 +16,8 @@ import FreeCAD
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
+from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.placements import container_matrix
 
 # Tessellation chord error: a small fraction of the model size, within these bounds (mm).  The
 # matcher's tolerance is 0.3 mm, so even the coarsest bound stays well below it.
@@ -33,14 +35,9 @@ def _label(obj) -> str:
 
 def _kind(obj):
     """("mesh"|"points"|"shape"|None, data) without expensive work."""
-    if obj is None:
-        return None, None
-    mesh = getattr(obj, "Mesh", None)
-    if hasattr(mesh, "Topology") and hasattr(mesh, "CountFacets"):
-        return "mesh", mesh
-    pts = getattr(obj, "Points", None)
-    if hasattr(pts, "CountPoints") and hasattr(pts, "Points"):
-        return "points", pts
+    kind, kernel = fc_scan.kernel_of(obj)
+    if kind is not None:
+        return kind, kernel
     if hasattr(obj, "Shape") or getattr(obj, "TypeId", "") in ("App::Link", "App::LinkPython", "App::Part"):
         import Part
 
@@ -108,14 +105,8 @@ def model_cloud(obj, deflection_mm: float | None = None) -> Cloud:
 
 def _with_parent_placement(obj, cloud: Cloud) -> Cloud:
     """Mesh and Points kernels already apply the object's own Placement; add that of containers."""
-    try:
-        extra = obj.getGlobalPlacement().multiply(obj.Placement.inverse())
-    except Exception:  # objects without Placement
-        return cloud
-    if extra.isIdentity():
-        return cloud
-    T = np.array(extra.toMatrix().A, dtype=np.float64).reshape(4, 4)
-    return cloud.transformed(T)
+    T = container_matrix(obj)
+    return cloud if T is None else cloud.transformed(T)
 
 
 def import_model_file(doc, path, units: str = "mm", name: str | None = None):
@@ -142,19 +133,26 @@ def import_model_file(doc, path, units: str = "mm", name: str | None = None):
         obj.Shape = shape
     else:
         cloud = read_cloud(path, units=units)
-        if cloud.is_mesh:
-            import Mesh
-
-            vectors = [FreeCAD.Vector(*p) for p in cloud.points.tolist()]
-            obj = doc.addObject("Mesh::Feature", _object_name(label))
-            obj.Mesh = Mesh.Mesh((vectors, [tuple(t) for t in cloud.triangles.tolist()]))
-        else:
-            import Points
-
-            obj = doc.addObject("Points::Feature", _object_name(label))
-            obj.Points = Points.Points(list(map(tuple, cloud.points.tolist())))
+        obj = add_model(doc, cloud, label)
         for warning in cloud.warnings:
             FreeCAD.Console.PrintWarning(f"WorkCal: {warning}\n")
+    obj.Label = label
+    return obj
+
+
+def add_model(doc, cloud: Cloud, label: str):
+    """``cloud`` as a new object of ``doc``: a Mesh::Feature when it has triangles, else a Points::Feature."""
+    if cloud.is_mesh:
+        import Mesh
+
+        vectors = [FreeCAD.Vector(*p) for p in cloud.points.tolist()]
+        obj = doc.addObject("Mesh::Feature", _object_name(label))
+        obj.Mesh = Mesh.Mesh((vectors, [tuple(t) for t in cloud.triangles.tolist()]))
+    else:
+        import Points
+
+        obj = doc.addObject("Points::Feature", _object_name(label))
+        obj.Points = Points.Points(list(map(tuple, cloud.points.tolist())))
     obj.Label = label
     return obj
 

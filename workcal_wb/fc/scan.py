@@ -33,6 +33,8 @@ from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.units import extent_warning, mm_per_unit
 from workcal_wb.fc import init as fc_init
+from workcal_wb.fc.placements import matrix_of
+from workcal_wb.fc.proxies import Proxy
 
 PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
 SCAN_TYPE = "WorkCal::Scan"
@@ -46,10 +48,11 @@ FREECAD_POINT_FORMATS = (".e57",)
 SCAN_EXTENSIONS = (".ply", ".pcd", ".xyz", ".asc", ".pts", ".csv", ".txt", ".e57", ".stl", ".obj", ".off")
 
 
-class ScanFeature:
+class ScanFeature(Proxy):
     """Proxy of a WorkCal scan; caches the numpy cloud (never saved)."""
 
     Type = SCAN_TYPE
+    STATE = {"Type": SCAN_TYPE}
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -70,18 +73,8 @@ class ScanFeature:
     def onDocumentRestored(self, obj):
         self._cloud = None
 
-    # FreeCAD 0.20 serialises proxies with __getstate__/__setstate__, 1.x prefers dumps/loads.
-    def __getstate__(self):
-        return {"Type": self.Type}
-
     def __setstate__(self, state):
         self._cloud = None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        self.__setstate__(state)
 
 
 def is_scan(obj) -> bool:
@@ -91,11 +84,11 @@ def is_scan(obj) -> bool:
 
 def can_be_scan(obj) -> bool:
     """An object ``scan_cloud`` accepts: a WorkCal scan, any Points object or a Mesh object (cheap test)."""
-    return _kernel(obj)[0] is not None
+    return kernel_of(obj)[0] is not None
 
 
-def _kernel(obj):
-    """("points"|"mesh"|None, the kernel object)."""
+def kernel_of(obj):
+    """("points"|"mesh"|None, the object's Points or Mesh kernel), cheaply: nothing is copied."""
     if obj is None:
         return None, None
     pts = getattr(obj, "Points", None)
@@ -108,7 +101,7 @@ def _kernel(obj):
 
 
 def point_count(obj) -> int:
-    kind, kernel = _kernel(obj)
+    kind, kernel = kernel_of(obj)
     return 0 if kind is None else int(kernel.CountPoints)
 
 
@@ -152,7 +145,7 @@ def scan_cloud(obj) -> Cloud:
     property) and Mesh objects (their vertices).  The arrays are copies: changing them does not
     change the object.
     """
-    kind, kernel = _kernel(obj)
+    kind, kernel = kernel_of(obj)
     label = getattr(obj, "Label", repr(obj))
     if kind is None:
         raise InputError(f"{label!r} is not a point cloud or mesh, so it cannot be used as a scan; "
@@ -178,7 +171,7 @@ def _normals(obj, count: int):
     normals = getattr(obj, "Normal", None)
     if not normals or len(normals) != count:
         return None
-    rotation = np.array(obj.Placement.toMatrix().A).reshape(4, 4)[:3, :3]
+    rotation = matrix_of(obj.Placement)[:3, :3]
     return np.array([tuple(v) for v in normals], dtype=np.float64).reshape(-1, 3) @ rotation.T
 
 
@@ -235,7 +228,7 @@ def set_regions(obj, workpiece=None, reference=None, source: str = "user") -> No
     the input is refused (InputError).  The caller opens the undo transaction."""
     if source not in ("user", "auto"):
         raise InputError(f"region source must be 'user' or 'auto', not {source!r}")
-    if _kernel(obj)[0] is None:
+    if kernel_of(obj)[0] is None:
         raise InputError(f"{getattr(obj, 'Label', obj)!r} is not a point cloud or mesh; regions can only "
                          "be set on a scan")
     count = point_count(obj)

@@ -10,6 +10,7 @@ from workcal_wb.core.errors import InputError
 from workcal_wb.fc import init as fc_init
 from workcal_wb.fc import models
 from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.proxies import Proxy
 
 SETUP_TYPE = "WorkCal::Setup"
 SETUP_NAME = "WorkCalSetup"
@@ -18,8 +19,9 @@ PROPERTIES = {"scan": "Scan", "workpiece": "Workpiece", "reference": "Reference"
 UNCHANGED = object()  # set_setup default: leave that role as it is
 
 
-class SetupFeature:
+class SetupFeature(Proxy):
     Type = SETUP_TYPE
+    STATE = {"Type": SETUP_TYPE}
 
     def __init__(self, obj):
         obj.Proxy = self
@@ -31,18 +33,6 @@ class SetupFeature:
 
     def execute(self, obj):
         pass
-
-    def __getstate__(self):
-        return {"Type": self.Type}
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return self.__getstate__()
-
-    def loads(self, state):
-        self.__setstate__(state)
 
 
 def setup_object(doc, create: bool = False):

@@ -7,7 +7,6 @@ version switch is needed here; only creating Jobs (tests, GUI) has to pick ``Pat
 """
 from __future__ import annotations
 
-import FreeCAD
 import Path
 
 from workcal_wb.core.errors import InputError, MissingDependency
@@ -16,6 +15,7 @@ from workcal_wb.core.toolpath import DEFAULT_CHORD_TOL_MM, Envelope, RotaryTable
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, robot_poses
 from workcal_wb.core.toolpath.gcode import blocks
 from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
+from workcal_wb.fc.placements import placement
 
 SECONDS_PER_MINUTE = 60.0
 
@@ -55,10 +55,6 @@ def read_toolpath(obj) -> Toolpath:
     for op in _paths(obj):
         lines += [_gcode_line(c) for c in op.Path.Commands]
     return parse_gcode("\n".join(lines), source=source)
-
-
-def _matrix(T) -> "FreeCAD.Matrix":
-    return FreeCAD.Matrix(*[float(v) for v in T.reshape(-1)])
 
 
 def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
@@ -107,7 +103,7 @@ def make_robot_trajectory(doc, toolpath: Toolpath, calibration: CalibrationResul
                                 "export KRL or CSV instead") from exc
     T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
                                   chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
-    waypoints = [Robot.Waypoint(FreeCAD.Placement(_matrix(pose.matrix)), type="LIN", name=f"P{i}",
+    waypoints = [Robot.Waypoint(placement(pose.matrix), type="LIN", name=f"P{i}",
                                 vel=pose.feed_mm_min / SECONDS_PER_MINUTE, cont=False)
                  for i, pose in enumerate(robot_poses(toolpath, T, chord_tol_mm, rapid_feed_mm_min), start=1)]
     obj = doc.addObject("Robot::TrajectoryObject", name)

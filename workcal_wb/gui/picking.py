@@ -22,8 +22,10 @@ import FreeCAD
 import FreeCADGui
 
 import workcal_wb
+from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.placements import container_matrix
 from workcal_wb.gui import region_display
 from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
 
@@ -42,14 +44,8 @@ MIN_BOX_PX = 2  # a smaller "box" is a click, not a selection
 def world_points(obj) -> np.ndarray:
     """The scan points in document coordinates (the Placement of containing App::Parts added)."""
     points = fc_scan.scan_cloud(obj).points
-    try:
-        extra = obj.getGlobalPlacement().multiply(obj.Placement.inverse())
-    except Exception:  # objects without Placement
-        return points
-    if extra.isIdentity():
-        return points
-    T = np.array(extra.toMatrix().A, dtype=np.float64).reshape(4, 4)
-    return points @ T[:3, :3].T + T[:3, 3]
+    T = container_matrix(obj)
+    return points if T is None else frames.apply(T, points)
 
 
 def project(view, points: np.ndarray):

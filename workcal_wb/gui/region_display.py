@@ -11,8 +11,10 @@ import numpy as np
 
 import FreeCAD
 
+from workcal_wb.core import frames
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.placements import matrix_of
 
 OVERLAY_NAME = "WorkCalRegions"
 ROLES = ("workpiece", "reference")
@@ -48,8 +50,7 @@ def _local_points(obj, cloud_points: np.ndarray) -> np.ndarray:
     placement = getattr(obj, "Placement", None)
     if placement is None or placement.isIdentity():
         return cloud_points
-    inverse = np.array(placement.inverse().toMatrix().A, dtype=np.float64).reshape(4, 4)
-    return cloud_points @ inverse[:3, :3].T + inverse[:3, 3]
+    return frames.apply(matrix_of(placement.inverse()), cloud_points)
 
 
 def update(obj) -> dict:

@@ -6,40 +6,13 @@ re-creates them from the class path saved in the document.
 """
 from __future__ import annotations
 
-import workcal_wb
 from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.proxies import ViewProvider
 
 REGION_PROPERTIES = {fc_scan.WORKPIECE_PROP, fc_scan.REFERENCE_PROP, fc_scan.SOURCE_PROP, "Points", "Placement"}
 
 
-class _ViewProvider:
-    ICON = "WorkCal"
-
-    def __init__(self, vobj):
-        vobj.Proxy = self
-
-    def attach(self, vobj):
-        self.ViewObject = vobj
-        self.Object = vobj.Object
-
-    def getIcon(self):
-        return workcal_wb.icon(self.ICON)
-
-    # FreeCAD 0.20 serialises proxies with __getstate__/__setstate__, 1.x prefers dumps/loads.
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        return None
-
-
-class ViewProviderScan(_ViewProvider):
+class ViewProviderScan(ViewProvider):
     """A WorkCal scan: FreeCAD's point display plus the region overlay (see region_display)."""
 
     ICON = "WorkCal_Scan"
@@ -70,7 +43,7 @@ class ViewProviderScan(_ViewProvider):
         return True
 
 
-class ViewProviderSetup(_ViewProvider):
+class ViewProviderSetup(ViewProvider):
     """The document's WorkCal setup: double-click opens Choose models."""
 
     ICON = "WorkCal_Setup"

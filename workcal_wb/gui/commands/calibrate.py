@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import FreeCAD
 
-import workcal_wb
-from workcal_wb.gui.task_panels.common import active_document, guarded
+from workcal_wb.gui.task_panels.common import Command, active_document, show_panel
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -35,36 +34,19 @@ def calibrate(doc=None, scan=None, workpiece=None, reference=None, **options):
 
 def open_panel(doc=None, calibration=None):
     """Show the calibrate task panel (closing nothing else); returns the panel."""
-    import FreeCADGui
-
     from workcal_wb.gui.task_panels.calibrate_panel import CalibratePanel
 
     doc = doc or active_document()
-    if FreeCADGui.Control.activeDialog():
-        from workcal_wb.core.errors import WorkCalError
-
-        raise WorkCalError(translate("WorkCal", "another task panel is open; close it first"))
-    panel = CalibratePanel(doc, calibration=calibration)
-    FreeCADGui.Control.showDialog(panel)
-    return panel
+    return show_panel(lambda: CalibratePanel(doc, calibration=calibration))
 
 
-class CalibrateCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_Calibrate"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_Calibrate", "Calibrate"),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_Calibrate",
-                "Match the workpiece and the reference block in the scan and compute W = V^-1 U, "
-                "the workpiece frame in the robot base frame"),
-        }
+class CalibrateCommand(Command):
+    NAME, TITLE = "WorkCal_Calibrate", "Calibrate"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_Calibrate", "Calibrate")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Calibrate", "Match the workpiece and the reference block in the scan and "
+                                                      "compute W = V^-1 U, the workpiece frame in the robot base frame")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Calibrate")
-    def Activated(self):
+    def run(self):
         from workcal_wb.fc.calibration_object import is_calibration
         from workcal_wb.gui.task_panels.common import selected_objects
 

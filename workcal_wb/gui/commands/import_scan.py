@@ -11,10 +11,10 @@ import os
 
 import FreeCAD
 
-import workcal_wb
 from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.units import MM_PER_UNIT
-from workcal_wb.gui.task_panels.common import guarded, message, transaction, warning
+from workcal_wb.fc.undo import transaction
+from workcal_wb.gui.task_panels.common import Command, message, warning
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -106,22 +106,15 @@ def _show(doc, objects) -> None:
         view.fitAll()
 
 
-class ImportScanCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_ImportScan"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_ImportScan", "Import scan..."),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_ImportScan",
-                "Read a 3D scan of the mounted workpiece and the reference object (PLY, PCD, XYZ, ASC, PTS, "
-                "CSV, E57, STL, OBJ, OFF); it becomes the document's scan"),
-        }
+class ImportScanCommand(Command):
+    NAME, TITLE = "WorkCal_ImportScan", "Import scan"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_ImportScan", "Import scan...")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_ImportScan", "Read a 3D scan of the mounted workpiece and the reference "
+                                                       "object (PLY, PCD, XYZ, ASC, PTS, CSV, E57, STL, OBJ, OFF); it "
+                                                       "becomes the document's scan")
+    NEEDS_DOCUMENT = False
 
-    def IsActive(self):
-        return True
-
-    @guarded("Import scan")
-    def Activated(self):
+    def run(self):
         import FreeCADGui
 
         from workcal_wb.fc.scan import PARAMS

@@ -14,7 +14,8 @@ import FreeCAD
 
 import workcal_wb
 from workcal_wb.core.errors import InputError, WorkCalError
-from workcal_wb.gui.task_panels.common import active_document, guarded, message, show_error, transaction
+from workcal_wb.fc.undo import transaction
+from workcal_wb.gui.task_panels.common import Command, active_document, message, show_error, show_panel
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -218,33 +219,18 @@ class ChooseModelsPanel:
 
 
 def open_panel(doc=None) -> ChooseModelsPanel:
-    import FreeCADGui
-
     doc = doc or active_document()
-    active = FreeCADGui.Control.activeDialog()
-    if active:
-        raise WorkCalError(translate("WorkCal", "another task panel is open; close it first"))
-    panel = ChooseModelsPanel(doc)
-    FreeCADGui.Control.showDialog(panel)
-    return panel
+    return show_panel(lambda: ChooseModelsPanel(doc))
 
 
-class ChooseModelsCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_ChooseModels"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_ChooseModels", "Choose models..."),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_ChooseModels",
-                "Choose the scan, the workpiece model X-A and the reference model B-P (Part shapes, meshes or "
-                "point clouds from the document or from files)"),
-        }
+class ChooseModelsCommand(Command):
+    NAME, TITLE = "WorkCal_ChooseModels", "Choose models"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_ChooseModels", "Choose models...")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_ChooseModels", "Choose the scan, the workpiece model X-A and the reference "
+                                                         "model B-P (Part shapes, meshes or point clouds from the "
+                                                         "document or from files)")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Choose models")
-    def Activated(self):
+    def run(self):
         open_panel()
 
 

@@ -14,7 +14,7 @@ import workcal_wb
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.toolpath import FORMATS
 from workcal_wb.fc import prefs
-from workcal_wb.gui.task_panels.common import guarded
+from workcal_wb.gui.task_panels.common import Command
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -86,20 +86,13 @@ def show_preferences() -> None:
     FreeCADGui.showPreferences(GROUP)
 
 
-class PreferencesCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_Preferences"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_Preferences", "Preferences..."),
-            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_Preferences",
-                                         "Default units, tolerance, matching method and export format"),
-        }
+class PreferencesCommand(Command):
+    NAME, TITLE = "WorkCal_Preferences", "Preferences"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_Preferences", "Preferences...")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Preferences", "Default units, tolerance, matching method and export format")
+    NEEDS_DOCUMENT = False
 
-    def IsActive(self):
-        return True
-
-    @guarded("Preferences")
-    def Activated(self):
+    def run(self):
         show_preferences()
 
 

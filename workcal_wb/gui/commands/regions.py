@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import FreeCAD
 
-import workcal_wb
 from workcal_wb.core.errors import InputError, WorkCalError
-from workcal_wb.gui.task_panels.common import active_document, guarded, message, selected_objects, transaction, \
-    warning
+from workcal_wb.fc.undo import transaction
+from workcal_wb.gui.task_panels.common import (Command, active_document, message, refuse_second_panel,
+                                              selected_objects, warning)
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -50,13 +50,11 @@ def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece"):
 
     from workcal_wb.gui.picking import PickPanel
 
-    active = FreeCADGui.Control.activeDialog()
     current = _open_pick_panel()
     if current is not None:
         current.set_shape(shape)
         return current
-    if active:
-        raise WorkCalError(translate("WorkCal", "another task panel is open; close it first"))
+    refuse_second_panel()
     scan = scan or target_scan()
     gui_doc = FreeCADGui.getDocument(scan.Document.Name)
     view = gui_doc.ActiveView if gui_doc is not None else None
@@ -82,27 +80,24 @@ def _open_pick_panel():
     return None
 
 
-class PickCommand:
-    SHAPE, NAME = "box", "WorkCal_PickBox"
-    MENU = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick region (box)")
-    TIP = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick the workpiece or the reference region of the scan by "
-                                               "dragging boxes in the 3D view (Shift adds, Ctrl subtracts)")
-
-    def GetResources(self):
-        return {"Pixmap": workcal_wb.icon(self.NAME), "MenuText": self.MENU, "ToolTip": self.TIP}
+class PickCommand(Command):
+    SHAPE, NAME, TITLE = "box", "WorkCal_PickBox", "Pick region"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick region (box)")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_PickBox", "Pick the workpiece or the reference region of the scan by "
+                                                    "dragging boxes in the 3D view (Shift adds, Ctrl subtracts)")
 
     def IsActive(self):
-        return FreeCAD.ActiveDocument is not None and bool(FreeCAD.GuiUp)
+        return super().IsActive() and bool(FreeCAD.GuiUp)
 
-    def Activated(self):
-        guarded(translate("WorkCal", "Pick region"))(open_pick_panel)(shape=self.SHAPE)
+    def run(self):
+        open_pick_panel(shape=self.SHAPE)
 
 
 class PickLassoCommand(PickCommand):
     SHAPE, NAME = "lasso", "WorkCal_PickLasso"
-    MENU = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick region (lasso)")
-    TIP = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick the workpiece or the reference region of the scan by "
-                                                 "drawing polygons in the 3D view; right-click or Enter closes")
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick region (lasso)")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_PickLasso", "Pick the workpiece or the reference region of the scan by "
+                                                      "drawing polygons in the 3D view; right-click or Enter closes")
 
 
 # --- automatic regions ---------------------------------------------------------------------------
@@ -172,39 +167,23 @@ def clear_regions(scan=None) -> bool:
     return True
 
 
-class AutoRegionsCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_AutoRegions"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_AutoRegions", "Find regions automatically"),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_AutoRegions",
-                "Find the workpiece and the reference object in the scan with their models (removes the "
-                "platform, splits the objects and matches them); correct the result with the pick tools"),
-        }
+class AutoRegionsCommand(Command):
+    NAME, TITLE = "WorkCal_AutoRegions", "Find regions automatically"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_AutoRegions", "Find regions automatically")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_AutoRegions", "Find the workpiece and the reference object in the scan with "
+                                                        "their models (removes the platform, splits the objects and "
+                                                        "matches them); correct the result with the pick tools")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Find regions automatically")
-    def Activated(self):
+    def run(self):
         auto_regions()
 
 
-class ClearRegionsCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_ClearRegions"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_ClearRegions", "Clear regions"),
-            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_ClearRegions",
-                                         "Remove the workpiece and reference regions of the scan"),
-        }
+class ClearRegionsCommand(Command):
+    NAME, TITLE = "WorkCal_ClearRegions", "Clear regions"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_ClearRegions", "Clear regions")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_ClearRegions", "Remove the workpiece and reference regions of the scan")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Clear regions")
-    def Activated(self):
+    def run(self):
         clear_regions()
 
 

@@ -12,10 +12,9 @@ import traceback
 
 import FreeCAD
 
-import workcal_wb
 from workcal_wb.core.errors import Cancelled, InputError, WorkCalError
 from workcal_wb.gui.task_panels import QtCore
-from workcal_wb.gui.task_panels.common import active_document, calibration_for, guarded, message, warning
+from workcal_wb.gui.task_panels.common import Command, active_document, calibration_for, message, warning
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -30,22 +29,14 @@ def deviation_map(doc, calibration, range_mm: float | None = None):
     return make_deviation_map(doc, calibration, range_mm=range_mm)
 
 
-class DeviationMapCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_DeviationMap"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Deviation map"),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_DeviationMap",
-                "Colour the workpiece points of the scan by their signed distance to the placed model: "
-                "red where clay was added, blue where it was removed"),
-        }
+class DeviationMapCommand(Command):
+    NAME, TITLE = "WorkCal_DeviationMap", "Deviation map"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Deviation map")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Colour the workpiece points of the scan by their signed "
+                                                         "distance to the placed model: red where clay was added, blue "
+                                                         "where it was removed")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Deviation map")
-    def Activated(self):
+    def run(self):
         doc = active_document()
         deviation_map(doc, calibration_for(doc))
 
@@ -112,21 +103,13 @@ def open_in_browser(path: str) -> None:
         message(f"open {path} in a browser ({exc})")
 
 
-class ReportCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_Report"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_Report", "Calibration report"),
-            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_Report",
-                                         "Write the HTML report of the calibration (poses, residuals, "
-                                         "uncertainty, quality gates) and open it"),
-        }
+class ReportCommand(Command):
+    NAME, TITLE = "WorkCal_Report", "Calibration report"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_Report", "Calibration report")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Report", "Write the HTML report of the calibration (poses, residuals, "
+                                                   "uncertainty, quality gates) and open it")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Calibration report")
-    def Activated(self):
+    def run(self):
         doc = active_document()
         write_report(calibration_for(doc), open_it=True)
 
@@ -274,20 +257,14 @@ class ImageDialog:
         return self.dialog
 
 
-class StudiesCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_Studies"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_Studies", "Studies..."),
-            "ToolTip": QT_TRANSLATE_NOOP("WorkCal_Studies",
-                                         "Run one of the accuracy studies on a simulated scene and show its plot"),
-        }
+class StudiesCommand(Command):
+    NAME, TITLE = "WorkCal_Studies", "Studies"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_Studies", "Studies...")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Studies", "Run one of the accuracy studies on a simulated scene and show "
+                                                    "its plot")
+    NEEDS_DOCUMENT = False
 
-    def IsActive(self):
-        return True
-
-    @guarded("Studies")
-    def Activated(self):
+    def run(self):
         from workcal_wb.gui.task_panels import QtWidgets
         from workcal_wb.gui.task_panels.common import main_window
 

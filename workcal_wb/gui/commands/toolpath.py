@@ -11,9 +11,9 @@ import os
 
 import FreeCAD
 
-import workcal_wb
-from workcal_wb.gui.task_panels.common import (active_document, calibration_for, guarded, message,
-                                              selected_objects, transaction, warning, with_force)
+from workcal_wb.fc.undo import transaction
+from workcal_wb.gui.task_panels.common import (Command, active_document, calibration_for, message, selected_objects,
+                                              warning, with_force)
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -144,27 +144,25 @@ def export_filters() -> tuple[list, dict]:
     return filters, by_filter
 
 
-class TransformToolpathCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_TransformToolpath"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_TransformToolpath", "Calibrated toolpath"),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_TransformToolpath",
-                "Carry a Path/CAM Job, an operation or a G-code file from the workpiece frame into the robot "
-                "base frame with the calibration, shown as a Path object"),
-        }
+class ToolpathCommand(Command):
+    """Both toolpath commands: the calibration and the toolpath first, then ``use`` them."""
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Calibrated toolpath")
-    def Activated(self):
+    def run(self):
         doc = active_document()
         calibration = calibration_for(doc)
         source = choose_source(doc)
-        if source is None:
-            return
+        if source is not None:
+            self.use(doc, calibration, source)
+
+
+class TransformToolpathCommand(ToolpathCommand):
+    NAME, TITLE = "WorkCal_TransformToolpath", "Calibrated toolpath"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_TransformToolpath", "Calibrated toolpath")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_TransformToolpath", "Carry a Path/CAM Job, an operation or a G-code file from "
+                                                              "the workpiece frame into the robot base frame with the "
+                                                              "calibration, shown as a Path object")
+
+    def use(self, doc, calibration, source):
         obj = with_force(lambda force: transform_toolpath(doc, calibration, source, force=force))
         if obj is not None and FreeCAD.GuiUp:
             import FreeCADGui
@@ -173,32 +171,18 @@ class TransformToolpathCommand:
             FreeCADGui.Selection.addSelection(obj)
 
 
-class ExportToolpathCommand:
-    def GetResources(self):
-        return {
-            "Pixmap": workcal_wb.icon("WorkCal_ExportToolpath"),
-            "MenuText": QT_TRANSLATE_NOOP("WorkCal_ExportToolpath", "Export robot program"),
-            "ToolTip": QT_TRANSLATE_NOOP(
-                "WorkCal_ExportToolpath",
-                "Write the toolpath through the calibration as KUKA KRL, ABB RAPID, URScript, Fanuc LS, "
-                "G-code or CSV"),
-        }
+class ExportToolpathCommand(ToolpathCommand):
+    NAME, TITLE = "WorkCal_ExportToolpath", "Export robot program"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_ExportToolpath", "Export robot program")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_ExportToolpath", "Write the toolpath through the calibration as KUKA KRL, "
+                                                           "ABB RAPID, URScript, Fanuc LS, G-code or CSV")
 
-    def IsActive(self):
-        return FreeCAD.ActiveDocument is not None
-
-    @guarded("Export robot program")
-    def Activated(self):
+    def use(self, doc, calibration, source):
         from workcal_wb.core.toolpath import FORMATS
         from workcal_wb.fc import prefs
         from workcal_wb.gui.task_panels import QtWidgets
         from workcal_wb.gui.task_panels.common import main_window
 
-        doc = active_document()
-        calibration = calibration_for(doc)
-        source = choose_source(doc)
-        if source is None:
-            return
         filters, by_filter = export_filters()
         default = prefs.get("ExportFormat")
         initial = next(f for f in filters if by_filter[f] == default)

@@ -1,4 +1,5 @@
-"""What the WorkCal commands share: error guard, Report view messages, choosing objects, force confirmation.
+"""What the WorkCal commands share: the Command base class, error guard, Report view messages, choosing
+objects, force confirmation.
 
 Every command's ``Activated`` runs through ``guarded`` so that nothing raised inside a command reaches
 FreeCAD's event loop: a WorkCalError is a message for the user, anything else is logged as a bug.
@@ -12,6 +13,7 @@ import traceback
 
 import FreeCAD
 
+import workcal_wb
 from workcal_wb.core.errors import Cancelled, WorkCalError
 
 from . import QtWidgets
@@ -71,6 +73,42 @@ def guarded(title: str):
         return run
 
     return wrap
+
+
+class Command:
+    """A WorkCal command as FreeCAD calls it.  A subclass sets NAME (the command's name, also its icon's
+    and the translation context of MENU_TEXT and TOOL_TIP), TITLE (heads its error messages) and
+    defines ``run``, which ``Activated`` calls through ``guarded``."""
+
+    NAME = MENU_TEXT = TOOL_TIP = TITLE = ""
+    NEEDS_DOCUMENT = True  # greyed out while no document is open
+
+    def GetResources(self):
+        return {"Pixmap": workcal_wb.icon(self.NAME), "MenuText": self.MENU_TEXT, "ToolTip": self.TOOL_TIP}
+
+    def IsActive(self):
+        return not self.NEEDS_DOCUMENT or FreeCAD.ActiveDocument is not None
+
+    def Activated(self):
+        guarded(translate("WorkCal", self.TITLE))(self.run)()
+
+
+def refuse_second_panel() -> None:
+    """FreeCAD shows one task panel at a time: WorkCalError while another one is open."""
+    import FreeCADGui
+
+    if FreeCADGui.Control.activeDialog():
+        raise WorkCalError(translate("WorkCal", "another task panel is open; close it first"))
+
+
+def show_panel(make_panel):
+    """Show the task panel ``make_panel()`` returns and return it; it is made only when no other is open."""
+    import FreeCADGui
+
+    refuse_second_panel()
+    panel = make_panel()
+    FreeCADGui.Control.showDialog(panel)
+    return panel
 
 
 def active_document():
@@ -135,27 +173,6 @@ def with_force(action, confirm=None):
             return None
     warning(translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))
     return action(force=True)
-
-
-def transaction(doc, title: str):
-    """Context manager: one undo step, aborted when the body raises."""
-    from contextlib import contextmanager
-
-    @contextmanager
-    def manager():
-        opened = bool(getattr(doc, "UndoMode", 0))
-        if opened:
-            doc.openTransaction(title)
-        try:
-            yield
-        except BaseException:
-            if opened:
-                doc.abortTransaction()
-            raise
-        if opened:
-            doc.commitTransaction()
-
-    return manager()
 
 
 def process_events(seconds: float = 0.0) -> None:
