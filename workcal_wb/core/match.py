@@ -3,6 +3,13 @@
 The work happens with scan points moved onto the model (scan -> model), because the model is the
 complete surface: every scan point of the part has a true mate on it and clutter has none.  The
 result reports U = (scan -> model)^-1.
+
+Poses are compared by how many scan points they put on the model (weighted by closeness), never by
+the fraction of the scan: clutter around the part dilutes every pose alike.  A pose is trusted only
+when it explains the scan to within the scan's own noise (plus the tolerance), covers a real part
+of the model and pins every motion; a clearly different pose that fits almost as well (found by
+the search, or a half turn of a symmetric model) makes it ambiguous.  Otherwise the match fails
+and says why.
 """
 from __future__ import annotations
 
@@ -12,12 +19,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import frames, pointops
+from . import frames, global_search, pointops
 from .errors import InputError
-from .features import fpfh
 from .geometry import Cloud, checked, shape_kind
-from .global_search import distinct, feature_correspondences, ransac_poses
-from .refine import coarse_to_fine
+from .refine import MAD_TO_SIGMA, coarse_to_fine, refine
 from .result import AMBIGUOUS, FAILED, OK, MatchResult
 from .stability import stability
 from .surface import SurfaceModel
@@ -35,20 +40,43 @@ class MatchOptions:
     method: str = "robust"
     tolerance_mm: float = 0.3
     coarse_voxel_mm: float | None = None  # default: model diagonal / COARSE_VOXELS_PER_DIAGONAL
-    ransac_samples: int = 30000
+    ransac_samples: int = 40000
     candidates: int = 4  # distinct poses refined after the global search
     ambiguity_ratio: float = 0.9  # a distinct pose scoring this fraction of the best -> ambiguous
-    min_fitness: float = 0.1  # fraction of scan points that must lie on the model
+    min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
-    max_fine_points: int = 20000  # the final passes use a random subset of this size
+    max_fine_points: int = 20000  # the final passes and the statistics use a random subset of this size
     seed: int = 0
 
 
-COARSE_VOXELS_PER_DIAGONAL = 50
-# RANSAC poses checked against the geometry; distinct ones within half the best score are refined.
-RANSAC_VERIFIED = 30
+COARSE_VOXELS_PER_DIAGONAL = 40
+# RANSAC poses kept by their votes, the distinct ones of them checked against the geometry, on at
+# most this many coarse scan points.
+RANSAC_KEPT, RANSAC_VERIFIED, VERIFY_POINTS = 200, 30, 600
+# Fewest coarse points worth describing by features, and how much finer than the default grid
+# the global search may go to get them.
+MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 500, 2.0
+# RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
+# much as the best; the half turns of a symmetric model are also tried after refinement).
+CANDIDATE_FLOOR = 0.7
+# Steps of the final robust pass on all the fine points, from a pose already within their noise.
+POLISH_ITERATIONS = 2
+# Patches the scan's noise is measured on, and points the statistics of the verdict are taken
+# over (a random subset: percentages to about half a percent).
+NOISE_PROBES, VERDICT_POINTS = 300, 10000
 # Points of the middle refinement stage, where the gate shrinks: enough to average the noise.
-MEDIUM_POINTS = 5000
+MEDIUM_POINTS = 3000
+# Global candidates scoring below this fraction of the best are not refined further: after the
+# coarse stage they cannot come within ``ambiguity_ratio`` of it.
+RIVAL_FLOOR = 0.6
+# A placed model must explain the scan to within its own noise: the robust residual scale may be
+# at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
+# matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
+MAX_NOISE_RATIO = 3.0
+# Points that scatter about local quadric fits by more than this fraction of the fit's radius
+# are a volume, not a surface (surface scans measured below 0.1, noisy sparse ones included;
+# a random blob 0.34).
+MAX_SCATTER = 0.3
 
 
 def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOptions = MatchOptions(),
@@ -59,9 +87,12 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
     MatchOptions fields.  Bad input raises InputError; a match that cannot be trusted comes back
     with status "failed" or "ambiguous" and the reasons.
     """
-    options = replace(options, **overrides)
-    if options.method not in METHODS:
-        raise InputError(f"unknown match method {options.method!r}; choose one of {', '.join(METHODS)}")
+    options = _checked_options(replace(options, **overrides))
+    with pointops.single_threaded_blas():
+        return _match(scan, model, init, options)
+
+
+def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
     timer = PhaseTimer()
     with timer("model"):
         surface = model if isinstance(model, SurfaceModel) else SurfaceModel(checked(model, 3), options.seed)
@@ -74,26 +105,59 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                            reasons=[f"{scan.name}: the scan points are {kind}; they cannot fix a pose"])
+    fine = _subset(scan.points, options.max_fine_points, rng)
+    medium = _subset(fine, MEDIUM_POINTS, rng)
+    noise, patch = pointops.surface_noise(medium, rng, probes=NOISE_PROBES)
+    if not noise <= MAX_SCATTER * patch:
+        return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
+                           reasons=[f"{scan.name}: the points do not lie on a surface (they scatter {noise:.2f} mm "
+                                    f"about local fits {patch:.2f} mm across); a scan samples a surface"])
 
-    voxel = options.coarse_voxel_mm or surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
+    # A coarse voxel finer than the scan's spacing leaves one point per voxel and features with too
+    # few neighbours; the 12th neighbour of a surface point lies about two spacings away, and the
+    # medium subset is sparser than the scan by the square root of their sizes (a surface).
+    spacing = patch / 2 * np.sqrt(len(medium) / len(scan))
+    voxel = options.coarse_voxel_mm or max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
     if init is None:
         with timer("global search"):
-            starts = _global_candidates(scan.points, surface, voxel, options, rng)
+            starts = _global_candidates(scan.points, surface, voxel, options, rng, min_voxel=1.5 * spacing)
         if not starts:
             return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                                reasons=["global search found no consistent pose: the scan may not contain the model"])
+        gate = voxel / 2  # where the coarse refinement of the global candidates left off
     else:
-        starts = [frames.invert(frames.as_transform(init, "initial guess"))]
+        starts = [(frames.invert(frames.as_transform(init, "initial guess")), 1.0)]
+        gate = voxel  # a guess may be off by a few millimetres
 
     with timer("refine"):
-        medium = _subset(scan.points, MEDIUM_POINTS, rng)
-        fine = _subset(scan.points, options.max_fine_points, rng)
-        floor = max(surface.spacing, pointops.median_spacing(scan.points, seed=options.seed))
-        best = _refine(options.method, [medium, fine], surface, starts[0], voxel, floor)
-        rivals = [_refine(options.method, [medium], surface, T, voxel, floor).T for T in starts[1:]]
-        scores = _scores(medium, surface, [best.T] + rivals, best.gate)
+        best, rivals = _refine(options.method, starts, medium, fine, surface, gate)
+        scores = inlier_scores(medium, surface, [best.T] + rivals, best.gate)
     with timer("verdict"):
-        return _verdict(scan, surface, best, list(zip([best.T] + rivals, scores)), options, voxel, result, timer)
+        return _verdict(scan, fine[:VERDICT_POINTS], noise, surface, best, list(zip([best.T] + rivals, scores)), options, voxel,
+                        result, timer)
+
+
+def prepare(surface: SurfaceModel) -> SurfaceModel:
+    """Compute ahead of time everything model-side a match may use: the coarse features at the
+    default voxel and the finer ones a partial scan may ask for, and the whole nearest-sample
+    grid the refinement looks up.  A batch of matches against one model then pays for it once;
+    without it the same work is done lazily, a little in each match (seconds for ~100k samples)."""
+    voxel = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
+    while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / MAX_VOXEL_REFINEMENT:
+        surface.coarse(voxel)
+        voxel /= 1.25
+    surface.grid_level(0).precompute()
+    return surface
+
+
+def _checked_options(options: MatchOptions) -> MatchOptions:
+    if options.method not in METHODS:
+        raise InputError(f"unknown match method {options.method!r}; choose one of {', '.join(METHODS)}")
+    if not options.tolerance_mm > 0:
+        raise InputError(f"match tolerance must be > 0 mm, got {options.tolerance_mm}")
+    if options.coarse_voxel_mm is not None and not options.coarse_voxel_mm > 0:
+        raise InputError(f"coarse voxel must be > 0 mm, got {options.coarse_voxel_mm}")
+    return options
 
 
 class PhaseTimer:
@@ -120,70 +184,104 @@ def _subset(points: np.ndarray, limit: int, rng: np.random.Generator) -> np.ndar
 
 
 def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, options: MatchOptions,
-                       rng: np.random.Generator) -> list[np.ndarray]:
-    """Distinct scan -> model poses from feature RANSAC, each refined on the coarse grid, best first."""
-    coarse, _ = pointops.voxel_downsample(points, voxel)
+                       rng: np.random.Generator, min_voxel: float = 0.0) -> list[tuple[np.ndarray, float]]:
+    """Distinct scan -> model poses from feature RANSAC, each refined on the coarse grid, with
+    their scores, best first."""
+    coarse = global_search.coarse_points(points, voxel)
+    # A small piece of the model (partial overlap) leaves too few coarse points to describe:
+    # refine the grid for it, down to MAX_VOXEL_REFINEMENT times finer but not below ``min_voxel``.
+    finest = max(min_voxel, voxel / MAX_VOXEL_REFINEMENT)
+    while len(coarse) < MIN_COARSE_POINTS and voxel / 1.25 >= finest:
+        voxel /= 1.25
+        coarse = global_search.coarse_points(points, voxel)
+    coarse = global_search.without_large_plane(coarse, voxel, surface.diagonal, rng)
     if len(coarse) < 10:
         return []
-    normals = pointops.orient_consistently(coarse, pointops.estimate_normals(coarse, 2 * voxel))
-    model_points, _, model_features = surface.coarse(voxel)
-    si, mi = feature_correspondences(fpfh(coarse, normals, 5 * voxel), model_features)
-    poses, _ = ransac_poses(coarse[si], model_points[mi], 1.5 * voxel, rng, samples=options.ransac_samples,
-                            keep=RANSAC_VERIFIED, min_edge=3 * voxel)
+    features, normals = global_search.describe_scan(coarse, voxel)
+    model_points, model_normals, model_features = surface.coarse(voxel)
+    si, mi, side = global_search.feature_correspondences(features, model_features)
+    poses, votes = global_search.ransac_poses(coarse[si], model_points[mi], side[:, None] * normals[si],
+                                              model_normals[mi], 1.5 * voxel, rng, samples=options.ransac_samples,
+                                              keep=RANSAC_KEPT, min_edge=3 * voxel)
     if len(poses) == 0:
         return []
-    verified = _scores(coarse, surface, poses, 1.5 * voxel)
-    centre = coarse.mean(axis=0)
-    keep = [i for i in distinct(list(poses), verified, centre, 10.0, 0.1 * surface.diagonal)[:options.candidates]
-            if verified[i] >= 0.5 * verified.max()]
-    refined = [coarse_to_fine([coarse], surface, poses[i], 3 * voxel, voxel / 2).T for i in keep]
-    scores = _scores(coarse, surface, refined, voxel)
-    order = distinct(refined, scores, centre, 5.0, 0.05 * surface.diagonal)
-    return [refined[i] for i in order]
+    probe = _subset(coarse, VERIFY_POINTS, rng)
+    centre = probe.mean(axis=0)
+    # Many hypotheses are near copies of the best one; a symmetric twin must not be crowded out.
+    poses = poses[global_search.distinct(poses, votes, centre, 15.0, 0.1 * surface.diagonal, RANSAC_VERIFIED)]
+    verified = inlier_scores(probe, surface, poses, 1.5 * voxel)
+    keep = [i for i in global_search.distinct(poses, verified, centre, 15.0, 0.1 * surface.diagonal)
+            if verified[i] >= CANDIDATE_FLOOR * verified.max()][:options.candidates]
+    refined = [coarse_to_fine([probe], surface, poses[i], 3 * voxel, voxel / 2).T for i in keep]
+    scores = inlier_scores(probe, surface, refined, voxel)
+    order = global_search.distinct(refined, scores, centre, 5.0, 0.05 * surface.diagonal)
+    return [(refined[i], float(scores[i])) for i in order if scores[i] > 0]
 
 
-def _refine(method: str, stages, surface: SurfaceModel, T: np.ndarray, gate: float, floor: float):
+def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float):
+    """The best pose refined on all the fine points, and the distinct rivals refined on the medium ones.
+
+    Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
+    and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
+    can tie with the right one, but only the right one brings the residuals down to the noise.
+    """
+    contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
+    if len(contenders) == 1 and method != "robust":
+        states = []
+    else:
+        states = [coarse_to_fine([medium], surface, T, gate, surface.spacing) for T in contenders]
+        scores = inlier_scores(medium, surface, [s.T for s in states], min(s.gate for s in states))
+        order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
+        contenders, states = [contenders[i] for i in order], [states[i] for i in order]
     if method == "robust":
-        return coarse_to_fine(stages, surface, T, gate, floor)
-    from .paper_methods import refine_paper
+        chosen = states[0]
+        best = refine(fine, surface, chosen.T, chosen.gate, chosen.scale, POLISH_ITERATIONS)
+        best.iterations += chosen.iterations
+    else:
+        from .paper_methods import refine_paper
 
-    return refine_paper(method, stages[-1], surface, T)
+        best = refine_paper(method, fine, surface, contenders[0], gate)
+    rivals = [s.T for s in states[1:]] + _symmetric_twins(best, medium, surface, gate)
+    keep = global_search.distinct([best.T] + rivals, np.arange(len(rivals) + 1)[::-1], medium.mean(axis=0), 5.0,
+                                  0.05 * surface.diagonal)
+    return best, [rivals[i - 1] for i in sorted(keep)[1:]]
 
 
-def _scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: float) -> np.ndarray:
-    """For each transform, the fraction of points on the model, each weighted by how close it is
-    (1 on the surface, 0 at the gate); all transforms in one tree query."""
+def _symmetric_twins(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list[np.ndarray]:
+    """The best pose turned by the model's half-turn self-maps, refined where they fit at all.
+
+    Feature search can miss the twin of a symmetric part (a box's faces all look alike), so the
+    flips a box, an ellipsoid or a cylinder maps onto itself are tried directly.
+    """
+    twins = surface.symmetry_flips @ best.T
+    scores = inlier_scores(medium, surface, np.concatenate([best.T[None], twins]), best.gate)
+    return [coarse_to_fine([medium], surface, T, gate, surface.spacing).T
+            for T, score in zip(twins, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
+
+
+def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: float) -> np.ndarray:
+    """For each transform, how many points it puts on the model, each weighted by how close it is
+    (1 on the surface, 0 at the gate): a count, so clutter cannot dilute it; one tree query."""
     Ts = np.asarray(transforms).reshape(-1, 4, 4)
     moved = (np.matmul(points[None], Ts[:, :3, :3].transpose(0, 2, 1)) + Ts[:, None, :3, 3]).reshape(-1, 3)
-    _, idx, found = surface.nearest(moved, gate)
+    _, idx, found = surface.nearest_cell(moved, gate)
     r = np.where(found, surface.plane_residuals(moved, idx), gate)
-    return np.clip(1 - (r / gate) ** 2, 0, 1).reshape(len(Ts), -1).mean(axis=1)
+    return np.clip(1 - (r / gate) ** 2, 0, 1).reshape(len(Ts), -1).sum(axis=1)
 
 
-def _coverage(moved_inliers: np.ndarray, surface: SurfaceModel, voxel: float) -> float:
-    """Fraction of the model's occupied voxels that hold at least one matched scan point."""
-    origin = surface.points.min(axis=0) - voxel
-
-    def occupied(p):
-        cells = np.floor((p - origin) / voxel).astype(np.int64)
-        return np.unique((cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2])
-
-    model_cells = occupied(surface.points)
-    return float(np.isin(model_cells, occupied(moved_inliers), assume_unique=True).mean())
-
-
-def _verdict(scan: Cloud, surface: SurfaceModel, best, candidates, options: MatchOptions, voxel: float,
-             result: dict, timer: PhaseTimer) -> MatchResult:
-    """Deviation statistics on all scan points, stability, ambiguity and the status with reasons."""
-    T = best.T
-    gate = best.gate
-    moved = frames.apply(T, scan.points)
-    _, idx, found = surface.nearest(moved, gate)
+def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceModel, best, candidates,
+             options: MatchOptions, voxel: float, result: dict, timer: PhaseTimer) -> MatchResult:
+    """Deviation statistics on the (sub)sampled scan points, stability, ambiguity and the status
+    with reasons; ``noise`` is the scan's own (pointops.surface_noise)."""
+    T, gate = best.T, best.gate
+    moved = frames.apply(T, sample)
+    _, idx, found = surface.nearest_cell(moved, gate)
     deviation = surface.plane_residuals(moved[found], idx[found])
     distance = np.abs(deviation)
     n_in = int(found.sum())
-    fitness = n_in / len(scan)
+    fitness = n_in / len(sample)
     coverage = _coverage(moved[found], surface, voxel) if n_in else 0.0
+    sigma = MAD_TO_SIGMA * float(np.median(distance)) if n_in else float("inf")
     stab = stability(moved[found], surface.normals[idx[found]])
     reasons, status = [], OK
     if n_in < MIN_SCAN_POINTS or fitness < options.min_fitness:
@@ -192,28 +290,33 @@ def _verdict(scan: Cloud, surface: SurfaceModel, best, candidates, options: Matc
     if coverage < options.min_coverage:
         reasons.append(f"the matched points cover only {coverage:.1%} of the model surface (at least "
                        f"{options.min_coverage:.0%} needed)")
+    if sigma > MAX_NOISE_RATIO * noise + options.tolerance_mm:
+        reasons.append(f"the model does not fit the scan within its noise: residual scale {sigma:.2f} mm where "
+                       f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
+                       f"{options.tolerance_mm} mm tolerance): the scan may not contain this model")
     if reasons:
         status = FAILED
     best_score = candidates[0][1]
     listed = []
     centre = surface.points.mean(axis=0)
     for Tc, score in candidates:
-        listed.append({"matrix": frames.invert(Tc).tolist(), "score": score,
-                       "score_ratio": score / best_score if best_score > 0 else 0.0,
+        listed.append({"matrix": frames.invert(Tc).tolist(), "score": float(score),
+                       "score_ratio": float(score / best_score) if best_score > 0 else 0.0,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
                        "shift_from_best_mm": float(np.linalg.norm(
                            frames.apply(frames.invert(Tc), centre[None])[0]
                            - frames.apply(frames.invert(T), centre[None])[0]))})
-    rivals = [c for c in listed[1:] if c["score_ratio"] >= options.ambiguity_ratio]
+    rivals = sorted((c for c in listed[1:] if c["score_ratio"] >= options.ambiguity_ratio),
+                    key=lambda c: -c["score_ratio"])
     if status == OK and rivals:
-        status = AMBIGUOUS
         reasons.append(f"{len(rivals)} clearly different pose(s) fit almost as well (best rival "
                        f"{rivals[0]['score_ratio']:.0%} of the best score, {rivals[0]['rotation_from_best_deg']:.1f} deg "
                        "away): the part may be symmetric; see candidates")
     if status == OK and not stab["constrained"]:
-        status = AMBIGUOUS
         reasons.append("the matched surface does not fix every motion (under-constrained): free "
                        + "; ".join(stab["free_motions"]))
+    if reasons and status == OK:
+        status = AMBIGUOUS
     percentiles = {str(q): float(np.percentile(distance, q)) for q in (50, 90, 95, 99)} if n_in else {}
     return MatchResult(
         status, matrix=frames.invert(T), fitness=fitness, coverage=coverage,
@@ -222,5 +325,11 @@ def _verdict(scan: Cloud, surface: SurfaceModel, best, candidates, options: Matc
         max_deviation_mm=float(distance.max()) if n_in else float("nan"),
         percentiles_mm=percentiles,
         within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
-        gate_mm=float(gate), n_inliers=n_in, iterations=int(best.iterations), time_s=timer.total(),
-        stability=stab, candidates=listed, reasons=reasons, **result)
+        gate_mm=float(gate), n_inliers=int(round(fitness * len(scan))), iterations=int(best.iterations),
+        time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, **result)
+
+
+def _coverage(matched: np.ndarray, surface: SurfaceModel, voxel: float) -> float:
+    """Fraction of the model's occupied cells (coarse voxels) that hold a matched point."""
+    cells = surface.occupied_cells(voxel)
+    return float(np.isin(cells, surface.cell_keys(matched, voxel), assume_unique=False).mean())

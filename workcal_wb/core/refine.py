@@ -25,6 +25,7 @@ class RefineState:
     iterations: int = 0
     sigma: float = float("inf")  # robust residual scale of the last stage (mm)
     gate: float = float("inf")
+    scale: float = float("inf")  # Geman-McClure kernel scale of the last stage (mm)
 
 
 def gauss_newton_step(points: np.ndarray, model_points: np.ndarray, normals: np.ndarray,
@@ -57,41 +58,40 @@ def geman_mcclure(residuals: np.ndarray, scale: float) -> np.ndarray:
 def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, scale: float,
            max_iterations: int = 30, tolerance: float = 1e-5) -> RefineState:
     """Iterate weighted point-to-plane steps at a fixed gate and kernel scale until the motion is
-    below ``tolerance`` (radians, and the same times the model diagonal in mm)."""
-    state = RefineState(T.copy(), gate=gate)
+    below ``tolerance`` (radians, and the same times the model diagonal in mm).  ``sigma`` comes
+    from the residuals of the last step, taken before it moved the pose by almost nothing."""
+    state = RefineState(T.copy(), gate=gate, scale=scale)
     tol_shift = tolerance * model.diagonal
     for it in range(max_iterations):
         moved = points @ state.T[:3, :3].T + state.T[:3, 3]
-        _, idx, found = model.nearest(moved, gate)
+        _, idx, found = model.nearest_cell(moved, gate)
         if found.sum() < 6:
             break
         moved, idx = moved[found], idx[found]
         r = model.plane_residuals(moved, idx)
+        state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r)))
         step = gauss_newton_step(moved, model.points[idx], model.normals[idx], r, geman_mcclure(r, scale))
         state.T = step @ state.T
         state.iterations = it + 1
         angle = np.arccos(np.clip((np.trace(step[:3, :3]) - 1) / 2, -1, 1))
         if angle < tolerance and np.linalg.norm(step[:3, 3]) < tol_shift:
             break
-    moved = points @ state.T[:3, :3].T + state.T[:3, 3]
-    _, idx, found = model.nearest(moved, gate)
-    r = model.plane_residuals(moved[found], idx[found])
-    state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r))) if len(r) else float("inf")
     return state
 
 
 def coarse_to_fine(stages: list[np.ndarray], model: SurfaceModel, T: np.ndarray, gate: float,
-                   floor: float, iterations_per_pass: int = 10) -> RefineState:
+                   floor: float, iterations_per_pass: int = 10, tolerance: float = 1e-4) -> RefineState:
     """Refine through point sets of growing density.  After each pass the gate shrinks towards
     4 sigma plus the model's sample spacing (never below ``floor`` mm) and the kernel scale towards
     2.5 sigma, sigma being the measured residual scale; a density is done when neither shrinks
-    by more than 10 %."""
+    by more than 10 %.  The default ``tolerance`` (see ``refine``) leaves the last 0.01 deg to a
+    final pass on more points."""
     state = RefineState(T, gate=gate)
     scale, min_scale = gate / 3, 1e-4 * model.diagonal
     total = 0
     for points in stages:
         for _ in range(8):
-            state = refine(points, model, state.T, gate, scale, iterations_per_pass)
+            state = refine(points, model, state.T, gate, scale, iterations_per_pass, tolerance)
             total += state.iterations
             # Shrink towards the targets, at most 4x per pass so a poor sigma cannot strand the pose.
             new_gate = min(gate, max(floor, gate / 4, 4 * state.sigma + model.spacing))
@@ -99,5 +99,5 @@ def coarse_to_fine(stages: list[np.ndarray], model: SurfaceModel, T: np.ndarray,
             if new_gate >= 0.9 * gate and new_scale >= 0.9 * scale:
                 break
             gate, scale = new_gate, new_scale
-    state.iterations, state.gate = total, gate
+    state.iterations, state.gate, state.scale = total, gate, scale
     return state

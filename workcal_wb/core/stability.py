@@ -8,9 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-# min/max eigenvalue ratio below which a motion counts as free.  Measured: cylinder 5e-5,
-# sphere 4e-5, plane 0, real partial bunny scans 0.02-0.1.
-FREE_MOTION_RATIO = 1e-3
+# min/max eigenvalue ratio below which a motion counts as free (too weakly held to trust).
+# Measured: cylinder 5e-5, sphere 4e-5, plane 0, one flat face of a block laid on a gently curved
+# car panel 3e-3; real partial bunny scans 0.02-0.1, simulated car 0.05, 2 cm figurine 0.017.
+FREE_MOTION_RATIO = 5e-3
+# A free twist whose rotation axis passes within this many RMS radii of the points is described
+# as a rotation (a sphere seen from one side turns about its centre, behind the points).
+ROTATION_REACH = 4.0
 
 
 def stability(points: np.ndarray, normals: np.ndarray, threshold: float = FREE_MOTION_RATIO) -> dict:
@@ -24,16 +28,21 @@ def stability(points: np.ndarray, normals: np.ndarray, threshold: float = FREE_M
     J = np.hstack([np.cross(p / radius, normals), normals])
     vals, vecs = np.linalg.eigh(J.T @ J)
     vals = np.maximum(vals, 0) / max(vals[-1], 1e-300)
-    free = [_describe_motion(vecs[:, i], centre) for i in range(6) if vals[i] < threshold]
+    free = [_describe_motion(vecs[:, i], centre, radius) for i in range(6) if vals[i] < threshold]
     return {"ratio": float(vals[0]), "eigenvalues": vals.tolist(), "free_motions": free,
             "constrained": not free}
 
 
-def _describe_motion(v: np.ndarray, centre: np.ndarray) -> str:
+def _describe_motion(v: np.ndarray, centre: np.ndarray, radius: float) -> str:
+    """A free motion as words: a rotation about an axis through a point (the screw axis of the
+    twist, nearest the centre) unless its axis lies more than ROTATION_REACH radii away, where it
+    is as good as a translation."""
     rot, trans = v[:3], v[3:]
-    if np.linalg.norm(rot) >= np.linalg.norm(trans):
+    if ROTATION_REACH * np.linalg.norm(rot) >= np.linalg.norm(trans):
+        omega = rot / radius  # undo the scaling of the rotation columns
+        through = centre + np.cross(omega, trans) / (omega @ omega)
         axis = rot / np.linalg.norm(rot)
-        return (f"rotation about axis ({axis[0]:.2f}, {axis[1]:.2f}, {axis[2]:.2f}) near "
-                f"({centre[0]:.1f}, {centre[1]:.1f}, {centre[2]:.1f}) mm")
+        return (f"rotation about axis ({axis[0]:.2f}, {axis[1]:.2f}, {axis[2]:.2f}) through "
+                f"({through[0]:.1f}, {through[1]:.1f}, {through[2]:.1f}) mm")
     direction = trans / np.linalg.norm(trans)
     return f"translation along ({direction[0]:.2f}, {direction[1]:.2f}, {direction[2]:.2f})"

@@ -18,6 +18,70 @@ from .geometry import Cloud, shape_kind
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
 # the query point (so residuals are exact), coarse enough to keep the tree ~100k samples.
 SAMPLES_PER_DIAGONAL = 250
+# A cell grid never has more cells than this (4 bytes each); its cell grows instead.
+MAX_GRID_CELLS = 16_000_000
+_UNKNOWN, _FAR = -2, -1
+# The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
+# level doubles both, so a loose gate does not fill a fine grid far from the surface.
+GATE_CELLS = 16
+
+
+class NearestGrid:
+    """The paper's 3D space binning: a grid around the model whose cells store the model sample
+    nearest to their centre, so finding a point's closest model point is one array lookup.
+
+    A grid answers for points within ``bound`` mm of the model; farther cells hold "none".  Cells
+    are filled ahead of time (``precompute``) or on first use (``lookup``), each by one KD-tree
+    query that is never repeated: an iterative fit keeps its points in nearly the same cells, so
+    after the first iteration almost every lookup is a hit.  The cell's sample is at most half a
+    cell diagonal from the point's own nearest sample, which at a cell of the sample spacing changes
+    a point-to-plane residual by a second-order amount (curvature x offset^2).
+    """
+
+    def __init__(self, points: np.ndarray, tree: cKDTree, cell: float, bound: float):
+        lo, hi = points.min(axis=0) - bound - cell, points.max(axis=0) + bound + cell
+        cell = max(cell, float(np.prod(hi - lo) / MAX_GRID_CELLS) ** (1 / 3))
+        self.lo, self.cell, self.bound, self.tree = lo, cell, bound, tree
+        self.dims = np.ceil((hi - lo) / cell).astype(np.int64) + 1
+        self.index = np.full(int(np.prod(self.dims)), _UNKNOWN, np.int32)
+        self.complete = False  # every cell filled (precompute)
+
+    def _cells(self, points: np.ndarray):
+        c = np.floor((points - self.lo) / self.cell).astype(np.int64)
+        inside = np.all((c >= 0) & (c < self.dims), axis=1)
+        return (c[:, 0] * self.dims[1] + c[:, 1]) * self.dims[2] + c[:, 2], inside
+
+    def _fill(self, cells: np.ndarray) -> None:
+        cells = np.unique(cells)
+        ijk = np.column_stack(np.unravel_index(cells, tuple(self.dims)))
+        d, j = self.tree.query(self.lo + (ijk + 0.5) * self.cell, distance_upper_bound=self.bound,
+                               workers=-1 if len(cells) > 10000 else 1)
+        self.index[cells] = np.where(np.isfinite(d), j, _FAR)
+
+    def lookup(self, points: np.ndarray) -> np.ndarray:
+        """Sample index per point, -1 where no sample lies within the bound of its cell."""
+        cells, inside = self._cells(points)
+        cells = np.where(inside, cells, 0)
+        idx = self.index[cells]
+        unknown = (idx == _UNKNOWN) & inside
+        if unknown.any():
+            self._fill(cells[unknown])
+            idx = self.index[cells]
+        return np.where(inside, idx, _FAR)
+
+    def precompute(self) -> None:
+        """Fill every cell now: those within the bound of a sample by query, the rest as "none"."""
+        if self.complete:
+            return
+        occupied = np.zeros(tuple(self.dims), bool)
+        c = np.floor((self.tree.data - self.lo) / self.cell).astype(np.int64)
+        occupied[c[:, 0], c[:, 1], c[:, 2]] = True
+        from scipy.ndimage import binary_dilation
+
+        near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1).ravel()
+        self._fill(np.flatnonzero(near & (self.index == _UNKNOWN)))
+        self.index[~near] = _FAR
+        self.complete = True
 
 
 class SurfaceModel:
@@ -45,6 +109,7 @@ class SurfaceModel:
         self.vertices = model.points
         self.triangles = model.triangles
         self._coarse = {}
+        self._grids: dict[int, NearestGrid] = {}
 
     def nearest(self, points: np.ndarray, gate: float):
         """(distance, sample index, found) for each point, searching only within ``gate`` mm."""
@@ -53,9 +118,48 @@ class SurfaceModel:
         found = np.isfinite(d)
         return d, np.where(found, idx, 0), found
 
+    def nearest_cell(self, points: np.ndarray, gate: float):
+        """Like ``nearest``, through the cell grid of the gate's level: each point gets its cell's
+        nearest sample."""
+        level = max(0, int(np.ceil(np.log2(gate / (GATE_CELLS * self.spacing)))))
+        idx = self.grid_level(level).lookup(points)
+        found = idx >= 0
+        idx = np.where(found, idx, 0)
+        d = np.linalg.norm(points - self.points[idx], axis=1)
+        found &= d <= gate
+        return d, idx, found
+
+    def grid_level(self, level: int) -> NearestGrid:
+        """The cell grid for gates up to GATE_CELLS x 2^level sample spacings (cached)."""
+        if level not in self._grids:
+            cell = self.spacing * 2**level
+            self._grids[level] = NearestGrid(self.points, self.tree, cell, GATE_CELLS * cell)
+        return self._grids[level]
+
+    def grid(self, cell: float, bound: float) -> NearestGrid:
+        """A cell grid of its own cell size and bound (cached), e.g. for a method that fills it
+        ahead of time."""
+        key = ("grid", round(cell, 9), round(bound, 9))
+        if key not in self._coarse:
+            self._coarse[key] = NearestGrid(self.points, self.tree, cell, bound)
+        return self._coarse[key]
+
     def plane_residuals(self, points: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Signed distance of each point to the tangent plane of its sample (positive outside)."""
         return np.einsum("ij,ij->i", points - self.points[idx], self.normals[idx])
+
+    def cell_keys(self, points: np.ndarray, cell: float) -> np.ndarray:
+        """One int64 key per point naming its cell of a ``cell`` mm grid fixed to the model, so keys
+        of scan and model points compare (21 bits per axis, centred, clipped far outside)."""
+        cells = np.clip(np.floor((points - self.points.min(axis=0)) / cell).astype(np.int64) + (1 << 20), 0, (1 << 21) - 1)
+        return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
+
+    def occupied_cells(self, cell: float) -> np.ndarray:
+        """Sorted keys of the grid cells the model surface passes through (cached per cell size)."""
+        key = ("cells", round(cell, 9))
+        if key not in self._coarse:
+            self._coarse[key] = np.unique(self.cell_keys(self.points, cell))
+        return self._coarse[key]
 
     def coarse(self, voxel: float):
         """(points, normals, FPFH features) of the model on a ``voxel`` grid, for global search."""
@@ -69,6 +173,18 @@ class SurfaceModel:
             normals[np.einsum("ij,ij->i", normals, self.normals[rep]) < 0] *= -1
             self._coarse[key] = (centroids, normals, fpfh(centroids, normals, 5 * voxel))
         return self._coarse[key]
+
+    @cached_property
+    def symmetry_flips(self) -> np.ndarray:
+        """(3, 4, 4) half turns about the principal axes of the surface through its centroid: the
+        self-maps of a box, an ellipsoid or a cylinder, tried to expose a symmetric twin pose."""
+        centre = self.points.mean(axis=0)
+        _, axes = np.linalg.eigh(np.cov((self.points - centre).T))
+        flips = np.tile(np.eye(4), (3, 1, 1))
+        for k in range(3):
+            R = 2 * np.outer(axes[:, k], axes[:, k]) - np.eye(3)  # 180 degrees about axis k
+            flips[k, :3, :3], flips[k, :3, 3] = R, centre - R @ centre
+        return flips
 
     @cached_property
     def exact_distance(self):

@@ -46,8 +46,11 @@ def with_overlap(scan: np.ndarray, rng, fraction: float = 0.4) -> np.ndarray:
 
 def with_clutter(scan: np.ndarray, model_to_scan: np.ndarray, model: Cloud, up: np.ndarray, rng,
                  stray_fraction: float = 0.2) -> np.ndarray:
-    """Add what a shop scan also sees: the table under the part, a box beside it, stray points.
+    """Add what a shop scan also sees: the table patch under the part, a box beside it, stray points.
 
+    Table and box together get as many points as the scan (spread uniformly over their visible
+    faces, with the scan's noise), so the part is about half of the solid points, as when a scanner
+    is zoomed on it; then ``stray_fraction`` of the result is uniform noise over the scene's box.
     Built in the model frame, where ``up`` is known, then moved into the scan frame.
     """
     spacing = pointops.median_spacing(scan)
@@ -59,23 +62,18 @@ def with_clutter(scan: np.ndarray, model_to_scan: np.ndarray, model: Cloud, up: 
     centre = model.points.mean(axis=0)
     size = model.diagonal()
     base = centre + (heights.min() - centre @ up) * up
-
-    def grid(origin, u, v, extent_u, extent_v):
-        s, t = np.meshgrid(np.arange(0, extent_u, spacing), np.arange(0, extent_v, spacing))
-        return origin + s.reshape(-1, 1) * u + t.reshape(-1, 1) * v
-
-    table = grid(base - 0.6 * size * (a + b), a, b, 1.2 * size, 1.2 * size)
     box_size = 0.3 * size
     box_corner = base + 0.45 * size * a - 0.15 * size * b
-    box = np.vstack([grid(box_corner + box_size * up, a, b, box_size, box_size),
-                     grid(box_corner, a, up, box_size, box_size),
-                     grid(box_corner, b, up, box_size, box_size)])
-    # The scanner sees only the part of the table and box on its side: keep what lies near the
-    # scan's footprint (within the scan's extent, projected along up) to stay a single-view scene.
-    clutter = frames.apply(model_to_scan, np.vstack([table, box]))
-    lo, hi = scan.min(axis=0) - 0.3 * size, scan.max(axis=0) + 0.3 * size
-    clutter = clutter[np.all((clutter > lo) & (clutter < hi), axis=1)]
-    clutter += rng.normal(0, 0.5 * spacing, clutter.shape)
+    # (origin, u, v, extent): the table under the part, the box's top and two of its sides.
+    faces = [(base - 0.6 * size * (a + b), a, b, 1.2 * size),
+             (box_corner + box_size * up, a, b, box_size),
+             (box_corner, a, up, box_size),
+             (box_corner, b, up, box_size)]
+    area = np.array([extent**2 for *_, extent in faces])
+    counts = rng.multinomial(len(scan), area / area.sum())
+    clutter = np.vstack([origin + extent * (rng.random((n, 1)) * u + rng.random((n, 1)) * v)
+                         for (origin, u, v, extent), n in zip(faces, counts)])
+    clutter = frames.apply(model_to_scan, clutter) + rng.normal(0, 0.5 * spacing, clutter.shape)
     scene = np.vstack([scan, clutter])
     n_stray = int(stray_fraction * len(scene) / (1 - stray_fraction))
     stray = rng.uniform(scene.min(axis=0), scene.max(axis=0), (n_stray, 3))
@@ -149,25 +147,54 @@ def bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS) -> list[Case]:
 
 # --- Simulated scans (exact truth) -------------------------------------------------------------
 
+# A simulated region case needs this many workpiece points; a view that sees fewer is turned.
+MIN_REGION_POINTS = 1000
+# The zoom's finest pitch: finer than the 0.1 mm noise, a scan would be a fuzzy slab, not a surface.
+MIN_PITCH_MM = 0.2
+
+
 def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
-    """Virtual-scanner captures of the car and the figurine: the workpiece region alone (as the
-    calibration matches it) and, for the car, the whole scene with platform and L-block around it."""
+    """Virtual-scanner captures of the car (25 cm) and the figurine (2 cm), 0.1 mm noise: the
+    workpiece region of a capture zoomed on the workpiece (the paper's second, zoomed capture; the
+    calibration matches such a region), and for the car also the whole scene with platform and
+    L-block around it, as the default capture framing both objects sees it."""
     from ..simulate.scanner import Scanner
     from ..simulate.scene import build_scene
 
     cases = []
     count = 2 if quick else 5
     for i in range(count):
+        azimuth = -75.0 + 35.0 * i  # the side facing away from the L-block, which can hide the workpiece
         for workpiece in ("car", "figurine"):
             scene = build_scene(workpiece, seed=seed + i)
-            scan = Scanner.aimed_at(scene, azimuth_deg=20 + 70 * i, seed=seed + i, noise_sigma_mm=0.1).scan(scene)
             model = scene.workpiece_model()
+            zoomed = zoomed_on_workpiece(scene, azimuth, seed + i).scan(scene)
+            turn = 0
+            while zoomed.mask("workpiece").sum() < MIN_REGION_POINTS and turn < 360:  # hidden behind the L-block
+                turn += 30
+                zoomed = zoomed_on_workpiece(scene, azimuth + turn, seed + i).scan(scene)
             cases.append(Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
-                              scan.points[scan.mask("workpiece")], model, scan.U, exact=True))
+                              zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True))
             if workpiece == "car":
+                scan = Scanner.aimed_at(scene, azimuth_deg=azimuth, seed=seed + i, noise_sigma_mm=0.1).scan(scene)
                 cases.append(Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model,
                                   scan.U, exact=True))
     return cases
+
+
+def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: float = 45.0,
+                        distance_mm: float = 1200.0, **settings):
+    """A scanner 1.2 m away looking at the workpiece, zoomed so that it fills about two thirds of the
+    image width (the default 640 x 480 image), but no finer than MIN_PITCH_MM; ``settings`` go to
+    the Scanner (e.g. a coarser pitch for a quicker test)."""
+    from ..simulate.scanner import Scanner
+
+    points = scene.workpiece.in_base().points
+    centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    position = centre + distance_mm * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    pitch = max(MIN_PITCH_MM, 1.5 * Cloud(points).diagonal() / 640)
+    return Scanner(position, centre, **{"pixel_pitch_mm": pitch, "noise_sigma_mm": 0.1, "seed": seed, **settings})
 
 
 def large_case(seed: int = 0) -> Case:

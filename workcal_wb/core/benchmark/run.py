@@ -1,7 +1,11 @@
 """Run WorkCal's matcher and the stock Open3D pipeline side by side and write the table.
 
 Each method runs in its own fresh process (so its peak memory is its own) over the same cases,
-generated deterministically from the seed in each process.  Times cover the match call only.
+generated deterministically from the seed in each process.  The model side is prepared once per
+model in each process, outside the timing, as a shop matching scan after scan against one model
+would: WorkCal's SurfaceModel with its coarse features and nearest-sample grid (match.prepare),
+stock's voxel grid, normals and FPFH of the model and the full model cloud with normals.  The processes alternate (WorkCal, stock, WorkCal, stock, ...) and a case's time is its
+fastest round, so a burst of load on the shared machine does not land on one method only.
 """
 from __future__ import annotations
 
@@ -9,8 +13,9 @@ import multiprocessing
 import platform
 import resource
 import statistics
+import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +23,14 @@ import numpy as np
 from .. import frames
 from ..atomic import atomic_write_text
 
-METHODS = ("WorkCal", "Open3D stock")
+WORKCAL, STOCK = "WorkCal", "Open3D stock"
+METHODS = (WORKCAL, STOCK)
 SUCCESS_DEG, SUCCESS_MM = 1.0, 1.0
+# Targets (issue 3): WorkCal's median time at most this fraction of stock's on the bunny scans;
+# simulated car scans within these errors (medians); the large scan within this time and memory.
+TIME_RATIO_TARGET = 0.5
+SIMULATED_TARGET = (0.01, 0.02)  # deg, mm
+LARGE_TARGET = (5.0, 1500.0)  # s, MB
 
 
 @dataclass
@@ -27,6 +38,7 @@ class Row:
     case: str
     group: str
     method: str
+    points: int
     rotation_error_deg: float
     displacement_mm: float  # largest displacement of a model vertex, estimate vs truth
     time_s: float
@@ -38,7 +50,14 @@ class Row:
         return self.rotation_error_deg < SUCCESS_DEG and self.displacement_mm < SUCCESS_MM
 
 
+@dataclass
+class Report:
+    text: str
+    missed: list = field(default_factory=list)  # targets not met, one line each
+
+
 def pose_errors(estimate, truth, model_points) -> tuple[float, float]:
+    """Rotation between estimate and truth (deg) and the largest displacement of a model point (mm)."""
     if estimate is None:
         return float("inf"), float("inf")
     rotation = frames.rotation_between_deg(estimate, truth)
@@ -46,35 +65,69 @@ def pose_errors(estimate, truth, model_points) -> tuple[float, float]:
     return rotation, float(displacement.max())
 
 
-def _build_cases(shared: Path | None, seed: int, quick: bool):
-    from .cases import bunny_cases, simulated_cases
+def bunny_folder(shared: Path | None) -> Path | None:
+    """The Stanford bunny data under ``shared``, or None when it is not there."""
+    folder = Path(shared) / "data" / "stanford-bunny" if shared else None
+    return folder if folder and (folder / "bun_zipper.ply").exists() else None
 
-    cases = simulated_cases(seed, quick=quick)
-    bunny = shared / "data" / "stanford-bunny" if shared else None
-    if bunny and (bunny / "bun_zipper.ply").exists():
-        cases += bunny_cases(bunny, seed, scans=("bun000.ply", "bun045.ply") if quick else None)
-    return cases
+
+def build_cases(shared: Path | None, seed: int, quick: bool):
+    """The bunny cases (when the shared data is there) and the simulated ones."""
+    from .cases import BUNNY_SCANS, bunny_cases, simulated_cases
+
+    folder = bunny_folder(shared)
+    scans = ("bun000.ply", "bun045.ply") if quick else BUNNY_SCANS
+    return (bunny_cases(folder, seed, scans=scans) if folder else []) + simulated_cases(seed, quick=quick)
 
 
 def _run_method(method: str, shared, seed: int, quick: bool, queue) -> None:
     """Child process: build the cases, match them all with one method, report rows and peak RSS."""
-    from ..match import match
     from ..geometry import Cloud
+    from ..match import match, prepare
     from ..surface import SurfaceModel
-    from .stock import stock_open3d
+    from .stock import prepare_stock_model, stock_open3d
 
+    prepared = {}
     rows = []
-    for case in _build_cases(shared, seed, quick):
+    for case in build_cases(shared, seed, quick):
+        key = id(case.model)
+        if key not in prepared:  # once per model, untimed (see the module docstring)
+            prepared[key] = (prepare(SurfaceModel(case.model, seed)) if method == WORKCAL
+                             else prepare_stock_model(case.model.points, case.model.diagonal()))
         t0 = time.perf_counter()
-        if method == "WorkCal":
-            result = match(Cloud(case.scan, name=case.name), SurfaceModel(case.model), seed=seed)
+        if method == WORKCAL:
+            result = match(Cloud(case.scan, name=case.name), prepared[key], seed=seed)
             estimate, status = result.matrix, result.status
         else:
-            estimate, status = stock_open3d(case.scan, case.model.points, case.model.diagonal()), "-"
+            estimate, status = stock_open3d(case.scan, prepared[key]), "-"
         elapsed = time.perf_counter() - t0
         rot, disp = pose_errors(estimate, case.truth, case.model.points)
-        rows.append(Row(case.name, case.group, method, rot, disp, elapsed, status, case.exact))
-    queue.put((rows, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+        rows.append(Row(case.name, case.group, method, len(case.scan), rot, disp, elapsed, status, case.exact))
+    queue.put((rows, _peak_mb()))
+
+
+def _run_large(method: str, path: str, seed: int, queue) -> None:
+    """Child process: one large scan, loaded from ``path``, matched cold (model preparation timed too)."""
+    from ..geometry import Cloud
+    from ..match import match
+    from .stock import prepare_stock_model, stock_open3d
+
+    data = np.load(path)
+    model = Cloud(data["model_points"], triangles=data["triangles"], name="car")
+    t0 = time.perf_counter()
+    if method == WORKCAL:
+        result = match(Cloud(data["scan"], name="large scan"), model, seed=seed)
+        estimate, status = result.matrix, result.status
+    else:
+        estimate, status = stock_open3d(data["scan"], prepare_stock_model(model.points, model.diagonal())), "-"
+    elapsed = time.perf_counter() - t0
+    rot, disp = pose_errors(estimate, data["truth"], model.points)
+    queue.put({"method": method, "points": len(data["scan"]), "time_s": elapsed, "rotation_error_deg": rot,
+               "displacement_mm": disp, "status": status, "peak_rss_mb": _peak_mb()})
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
 
 
 def _in_child(target, *args):
@@ -87,81 +140,170 @@ def _in_child(target, *args):
     return outcome
 
 
-def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print) -> str:
-    """Run both methods, write the Markdown table to ``out`` and return it."""
-    per_method = {}
-    for method in METHODS:
-        log(f"benchmark: running {method} ...")
-        per_method[method] = _in_child(_run_method, method, shared, seed, quick)
-    log("benchmark: 1M-point scan ...")
-    large = _in_child(_run_large, seed)
-    text = _table(per_method, large, seed, quick)
-    atomic_write_text(out, text)
-    return text
+def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print) -> Report:
+    """Run both methods (alternating, ``rounds`` times each), write the Markdown table to ``out``."""
+    rounds = 1 if quick else 2
+    per_method = {m: ([], 0.0) for m in METHODS}
+    for r in range(rounds):
+        for method in METHODS:
+            log(f"benchmark: {method}, round {r + 1} of {rounds} ...")
+            rows, peak = _in_child(_run_method, method, shared, seed, quick)
+            best, top = per_method[method]
+            if best:  # keep the first round's outcome, the fastest round's time
+                for kept, new in zip(best, rows):
+                    kept.time_s = min(kept.time_s, new.time_s)
+            per_method[method] = (best or rows, max(top, peak))
+    large = []
+    if not quick:
+        from .cases import large_case
 
-
-def _run_large(seed: int, queue) -> None:
-    from ..match import match
-    from ..geometry import Cloud
-    from .cases import large_case
-
-    case = large_case(seed)
-    t0 = time.perf_counter()
-    result = match(Cloud(case.scan, name=case.name), case.model, seed=seed)
-    elapsed = time.perf_counter() - t0
-    rot, disp = pose_errors(result.matrix, case.truth, case.model.points)
-    queue.put({"points": len(case.scan), "time_s": elapsed, "rotation_error_deg": rot, "displacement_mm": disp,
-               "status": result.status, "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024})
+        log("benchmark: large scan ...")
+        case = large_case(seed)
+        with tempfile.TemporaryDirectory() as folder:
+            path = str(Path(folder) / "large.npz")
+            np.savez(path, scan=case.scan, truth=case.truth, model_points=case.model.points,
+                     triangles=case.model.triangles)
+            del case
+            large = [_in_child(_run_large, method, path, seed) for method in METHODS]
+    note = None if bunny_folder(shared) else f"Stanford bunny data not found under {shared}: the bunny cases were skipped."
+    report = _table(per_method, large, seed, quick, rounds, note)
+    atomic_write_text(out, report.text)
+    return report
 
 
 def _fmt(x, digits=3):
     return "inf" if not np.isfinite(x) else f"{x:.{digits}f}"
 
 
-def _table(per_method: dict, large: dict, seed: int, quick: bool) -> str:
-    groups = list(dict.fromkeys(r.group for rows, _ in per_method.values() for r in rows))
-    ours_rows, stock_rows = per_method["WorkCal"][0], per_method["Open3D stock"][0]
-    lines = [
+def _median(values):
+    return statistics.median(values) if values else float("nan")
+
+
+def _summary_rows(per_method: dict) -> tuple[list, dict]:
+    """Table lines per group and method, and the summary numbers the targets are checked on."""
+    ours, stock = per_method[WORKCAL][0], per_method[STOCK][0]
+    groups = list(dict.fromkeys(r.group for r in ours))
+    bunny_groups = [g for g in groups if g.startswith("bunny")]
+    selections = [(g, g) for g in groups]
+    if bunny_groups:
+        selections.append(("**all bunny scans**", "bunny"))
+    selections.append(("**all**", None))
+    lines, numbers = [], {}
+    for label, key in selections:
+        def pick(rows):
+            return [r for r in rows if key is None or r.group == key or (key == "bunny" and r.group.startswith("bunny"))]
+
+        stock_time = _median([r.time_s for r in pick(stock)])
+        for method, rows in ((WORKCAL, pick(ours)), (STOCK, pick(stock))):
+            time_s = _median([r.time_s for r in rows])
+            stats = {"n": len(rows), "success": sum(r.success for r in rows) / len(rows),
+                     "rot": _median([r.rotation_error_deg for r in rows]),
+                     "disp": _median([r.displacement_mm for r in rows]),
+                     "max_disp": max(r.displacement_mm for r in rows), "time": time_s,
+                     "ratio": time_s / stock_time, "points": int(_median([r.points for r in rows]))}
+            numbers[(key if key is not None else "all", method)] = stats
+            lines.append(f"| {label} | {stats['n']} | {stats['points']:,} | {method} | {stats['success']:.0%} | "
+                         f"{_fmt(stats['rot'], 4)} | {_fmt(stats['disp'])} | {_fmt(stats['max_disp'])} | "
+                         f"{stats['time']:.3f} | {stats['ratio']:.2f} |")
+    return lines, numbers
+
+
+def _missed(numbers: dict, large: list) -> list:
+    missed = []
+    for (group, method), s in numbers.items():
+        if method != WORKCAL:
+            continue
+        stock = numbers[(group, STOCK)]
+        if group.startswith("bunny") and s["success"] < 1:
+            missed.append(f"{group}: WorkCal success {s['success']:.0%} (target 100 %)")
+        if group == "bunny":
+            if s["rot"] > stock["rot"] or s["disp"] > stock["disp"]:
+                missed.append(f"bunny scans: WorkCal median error {s['rot']:.4f} deg / {s['disp']:.3f} mm is worse "
+                              f"than stock's {stock['rot']:.4f} deg / {stock['disp']:.3f} mm")
+            if s["ratio"] > TIME_RATIO_TARGET:
+                missed.append(f"bunny scans: WorkCal takes {s['ratio']:.2f} x stock's median time "
+                              f"(target {TIME_RATIO_TARGET})")
+        if group.startswith("simulated car") and (s["rot"] >= SIMULATED_TARGET[0] or s["disp"] >= SIMULATED_TARGET[1]):
+            missed.append(f"{group}: median error {s['rot']:.4f} deg / {s['disp']:.4f} mm (target under "
+                          f"{SIMULATED_TARGET[0]} deg / {SIMULATED_TARGET[1]} mm)")
+    for entry in large:
+        if entry["method"] == WORKCAL and (entry["time_s"] >= LARGE_TARGET[0] or entry["peak_rss_mb"] >= LARGE_TARGET[1]
+                                           or entry["rotation_error_deg"] >= SUCCESS_DEG):
+            missed.append(f"large scan: {entry['time_s']:.2f} s, {entry['peak_rss_mb']:.0f} MB, "
+                          f"{entry['rotation_error_deg']:.4f} deg (target under {LARGE_TARGET[0]} s, "
+                          f"{LARGE_TARGET[1]:.0f} MB, {SUCCESS_DEG} deg)")
+    return missed
+
+
+def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, note: str | None) -> Report:
+    lines, numbers = _summary_rows(per_method)
+    missed = _missed(numbers, large)
+    text = [
         "# Benchmark: WorkCal matcher vs stock Open3D",
         "",
-        f"Generated by `make bench` (`python3 -m workcal_wb bench`), seed {seed}{', quick subset' if quick else ''}, "
-        f"on {platform.machine()} with {multiprocessing.cpu_count()} cores, Python {platform.python_version()}. "
-        "Both methods run on the same cases in the same run, each in its own process.",
+        f"Written by `make bench` (`python3 -m workcal_wb bench`), seed {seed}{', quick subset' if quick else ''}, "
+        f"on {platform.machine()} with {multiprocessing.cpu_count()} cores (shared with other jobs), "
+        f"Python {platform.python_version()}.",
         "",
-        f"Success: rotation error under {SUCCESS_DEG} deg and largest displacement of a model vertex under "
-        f"{SUCCESS_MM} mm. Errors are against the exact truth for simulated scans and against `bun.conf` for the "
-        "Stanford scans (itself good to about 0.05-0.1 deg, see the data README). Times are wall-clock per match "
-        "(model preparation included for both), medians over the group; the machine is shared and noisy, so "
-        "compare the ratio column, not absolute times.",
+        "## How to read it",
         "",
-        "| cases | n | method | success | median rot. err (deg) | median disp. (mm) | max disp. (mm) | median time (s) | time vs stock |",
-        "|---|---|---|---|---|---|---|---|---|",
+        f"Every case is matched by both methods in the same run, without an initial guess. A match succeeds when "
+        f"its rotation error is under {SUCCESS_DEG} deg and the largest displacement of a model vertex (estimate vs "
+        f"truth) is under {SUCCESS_MM} mm. Errors are against the exact truth for simulated scans and against "
+        "`bun.conf` for the Stanford scans, itself only good to about 0.05-0.1 deg (see the data README), so bunny "
+        "errors below that say \"found the right pose\", not how accurate it is; the simulated rows measure accuracy. "
+        "Disp. columns: the median over the cases of that largest displacement, and the largest over the cases.",
+        "",
+        "Times are wall-clock seconds per match call, medians over the cases of a row; \"time vs stock\" is that "
+        f"median over stock's median for the same cases. Each method runs in its own process, {rounds} "
+        "alternating round(s) per method, and a case's time is its fastest round, so load from other jobs on the "
+        "shared machine does not fall on one method only; still compare ratios rather than absolute times.",
+        "",
+        "What is cached: each model is prepared once per process, outside the timing, for both methods, as when "
+        "scan after scan is matched against one model. For WorkCal that is `match.prepare(SurfaceModel(model))`: "
+        "surface samples with normals and their KD-tree, the model's coarse FPFH features (at the default voxel and "
+        "the finer ones a partial scan may need) and the nearest-sample grid (the paper's space binning) within "
+        "16 sample spacings of the surface. For stock Open3D it is the model's voxel grid, normals and FPFH and "
+        "the full model cloud with normals (the tutorial pipeline would recompute them in every call). Everything "
+        "on the scan side is computed inside the timed call. The large scan is matched cold by both: its time "
+        "includes preparing the model.",
+        "",
+        "Stock is Open3D's global-registration tutorial pipeline (voxel = model diagonal / 50, FPFH, RANSAC on "
+        "feature matches with mutual filter, 100k iterations, confidence 0.999, then point-to-plane ICP at "
+        "0.4 voxel); WorkCal's status (ok / ambiguous / failed) is in the per-case table.",
+        "",
     ]
-    summary = {}
-    for group in groups + ["all"]:
-        for method, (rows, _) in per_method.items():
-            sel = [r for r in rows if group in ("all", r.group)]
-            stock_sel = [r for r in stock_rows if group in ("all", r.group)]
-            ratio = statistics.median(r.time_s for r in sel) / statistics.median(r.time_s for r in stock_sel)
-            success = sum(r.success for r in sel) / len(sel)
-            summary[(group, method)] = (success, ratio)
-            name = f"**{group}**" if group == "all" else group
-            lines.append(
-                f"| {name} | {len(sel)} | {method} | {success:.0%} | "
-                f"{_fmt(statistics.median(r.rotation_error_deg for r in sel), 4)} | "
-                f"{_fmt(statistics.median(r.displacement_mm for r in sel))} | "
-                f"{_fmt(max(r.displacement_mm for r in sel))} | "
-                f"{statistics.median(r.time_s for r in sel):.3f} | {ratio:.2f} |")
-    lines += ["", "Peak memory (resident set of the whole process, Python and libraries included): "
-              + ", ".join(f"{m} {mem:.0f} MB" for m, (_, mem) in per_method.items()) + ".", "",
-              f"Large scan: {large['points']:,} points matched by WorkCal in {large['time_s']:.2f} s, "
-              f"peak memory {large['peak_rss_mb']:.0f} MB, status {large['status']}, rotation error "
-              f"{_fmt(large['rotation_error_deg'], 4)} deg, largest displacement {_fmt(large['displacement_mm'])} mm.",
-              "", "## Per case", "",
-              "| case | WorkCal status | WorkCal rot. err (deg) | WorkCal disp. (mm) | WorkCal time (s) | stock rot. err (deg) | stock disp. (mm) | stock time (s) |",
-              "|---|---|---|---|---|---|---|---|"]
-    for ours, stock in zip(ours_rows, stock_rows):
-        lines.append(f"| {ours.case} | {ours.status} | {_fmt(ours.rotation_error_deg, 4)} | {_fmt(ours.displacement_mm)} | "
-                     f"{ours.time_s:.3f} | {_fmt(stock.rotation_error_deg, 4)} | {_fmt(stock.displacement_mm)} | "
-                     f"{stock.time_s:.3f} |")
-    return "\n".join(lines) + "\n"
+    if note:
+        text += [f"Note: {note}", ""]
+    text += [
+        "## Summary",
+        "",
+        "| cases | n | median points | method | success | median rot. err (deg) | median disp. (mm) | "
+        "max disp. (mm) | median time (s) | time vs stock |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        *lines,
+        "",
+        "Peak memory (resident set of the whole process over all cases, Python and libraries included): "
+        + ", ".join(f"{m} {mem:.0f} MB" for m, (_, mem) in per_method.items()) + ".",
+        "",
+    ]
+    if large:
+        text += ["## Large scan", "", "| method | points | status | rot. err (deg) | disp. (mm) | time (s) | peak memory (MB) |",
+                 "|---|---|---|---|---|---|---|"]
+        text += [f"| {e['method']} | {e['points']:,} | {e['status']} | {_fmt(e['rotation_error_deg'], 4)} | "
+                 f"{_fmt(e['displacement_mm'])} | {e['time_s']:.2f} | {e['peak_rss_mb']:.0f} |" for e in large]
+        text += ["", "The simulated car scanned at a 0.2 mm pitch with the platform and L-block around it, matched "
+                 "cold (model preparation included), each method in its own process.", ""]
+    text += ["## Targets", ""]
+    text += [f"- missed: {m}" for m in missed] or ["- all met (see the issue: 100 % bunny success, median error no "
+                                                   "worse than stock, at most half of stock's median time, simulated "
+                                                   "car under 0.01 deg and 0.02 mm, large scan under 5 s and 1.5 GB)."]
+    text += ["", "## Per case", "",
+             "| case | points | WorkCal status | WorkCal rot. err (deg) | WorkCal disp. (mm) | WorkCal time (s) | "
+             "stock rot. err (deg) | stock disp. (mm) | stock time (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for ours, stock in zip(per_method[WORKCAL][0], per_method[STOCK][0]):
+        text.append(f"| {ours.case} | {ours.points:,} | {ours.status} | {_fmt(ours.rotation_error_deg, 4)} | "
+                    f"{_fmt(ours.displacement_mm)} | {ours.time_s:.3f} | {_fmt(stock.rotation_error_deg, 4)} | "
+                    f"{_fmt(stock.displacement_mm)} | {stock.time_s:.3f} |")
+    return Report("\n".join(text) + "\n", missed)

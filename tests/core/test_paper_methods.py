@@ -1,0 +1,80 @@
+"""The paper's two shape measures: least-squares closest-point D (ICP) and the mean directed Hausdorff
+distance H through the precomputed space binning, minimised by sampled derivatives."""
+import numpy as np
+import pytest
+
+from workcal_wb.core import frames
+from workcal_wb.core.benchmark.cases import bunny_cases, random_motion, zoomed_on_workpiece
+from workcal_wb.core.benchmark.run import pose_errors
+from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.match import match
+from workcal_wb.core.paper_methods import hausdorff_distances, refine_paper
+from workcal_wb.core.simulate.scene import build_scene
+from workcal_wb.core.surface import SurfaceModel
+
+
+@pytest.fixture(scope="module")
+def car():
+    scene = build_scene("car", seed=5)
+    scan = zoomed_on_workpiece(scene, -40.0, 5).scan(scene)
+    motion = random_motion(np.random.default_rng(5))
+    points = frames.apply(motion, scan.points[scan.mask("workpiece")])
+    return points, SurfaceModel(scene.workpiece_model()), motion @ scan.U
+
+
+def _mean_distance(points, surface, T, gate):
+    """H of the scan placed by T (scan -> model), measured exactly on the mesh and capped at the gate."""
+    return np.minimum(surface.exact_distance(frames.apply(T, points)), gate).mean()
+
+
+@pytest.mark.parametrize("method", ["icp", "hausdorff"])
+def test_converges_from_a_nearby_start(car, method):
+    points, surface, U = car
+    start = frames.invert(U @ frames.from_euler_zyz(3.0, 2.0, -2.5, (3.0, -2.0, 2.0)))  # scan -> model
+    state = refine_paper(method, points[::4], surface, start)
+    rotation, displacement = pose_errors(frames.invert(state.T), U, surface.vertices)
+    assert rotation < 0.05 and displacement < 0.15
+    assert state.iterations > 5 and state.gate < 2.0  # it iterated and the gate closed in on the noise
+    gate = surface.diagonal / 40
+    assert _mean_distance(points, surface, state.T, gate) < 0.1 * _mean_distance(points, surface, start, gate)
+
+
+@pytest.mark.parametrize("method", ["icp", "hausdorff"])
+def test_selectable_by_name_after_the_global_search(car, method):
+    points, surface, U = car
+    result = match(Cloud(points), surface, method=method)
+    rotation, displacement = pose_errors(result.matrix, U, surface.vertices)
+    assert result.method == method and result.status == "ok"
+    assert rotation < 0.05 and displacement < 0.15
+
+
+def test_binning_gives_the_distance_to_the_surface(car):
+    _, surface, _ = car
+    grid = surface.grid(2 * surface.spacing, 5.0)
+    grid.precompute()
+    rng = np.random.default_rng(2)
+    near = surface.points[rng.choice(len(surface.points), 4000)] + rng.normal(0.0, 1.0, (4000, 3))
+    binned = hausdorff_distances(near, surface, grid, gate=5.0)
+    exact = np.minimum(surface.exact_distance(near), 5.0)
+    error = np.abs(binned - exact)
+    assert np.median(error) < 0.01 and np.percentile(error, 95) < 0.1
+    # Each filled cell holds the sample nearest its centre, as a KD-tree finds it.
+    cells = np.flatnonzero(grid.index >= 0)[::97]
+    centres = grid.lo + (np.column_stack(np.unravel_index(cells, tuple(grid.dims))) + 0.5) * grid.cell
+    _, nearest = surface.tree.query(centres)
+    assert np.array_equal(grid.index[cells], nearest)
+
+
+def test_paper_methods_on_a_real_bunny_scan(bunny):
+    case = bunny_cases(bunny, seed=4, scans=("bun090.ply",))[0]  # the clean scan
+    surface = SurfaceModel(case.model)
+    for method in ("icp", "hausdorff"):
+        result = match(Cloud(case.scan), surface, method=method)
+        rotation, displacement = pose_errors(result.matrix, case.truth, case.model.points)
+        assert result.status == "ok" and rotation < 0.5 and displacement < 1.0, method
+
+
+def test_unknown_paper_method_is_refused(car):
+    points, surface, U = car
+    with pytest.raises(ValueError, match="paper method"):
+        refine_paper("chamfer", points, surface, frames.invert(U))
