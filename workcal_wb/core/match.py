@@ -45,7 +45,7 @@ class MatchOptions:
     ambiguity_ratio: float = 0.9  # a distinct pose scoring this fraction of the best -> ambiguous
     min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
-    max_fine_points: int = 20000  # the final passes and the statistics use a random subset of this size
+    max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
     seed: int = 0
 
 
@@ -55,7 +55,7 @@ COARSE_VOXELS_PER_DIAGONAL = 40
 RANSAC_KEPT, RANSAC_VERIFIED, VERIFY_POINTS = 200, 30, 600
 # Fewest coarse points worth describing by features, and how much finer than the default grid
 # the global search may go to get them.
-MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 500, 2.0
+MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 # RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
 # much as the best; the half turns of a symmetric model are also tried after refinement).
 CANDIDATE_FLOOR = 0.7
@@ -133,8 +133,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate)
         scores = inlier_scores(medium, surface, [best.T] + rivals, best.gate)
     with timer("verdict"):
-        return _verdict(scan, fine[:VERDICT_POINTS], noise, surface, best, list(zip([best.T] + rivals, scores)), options, voxel,
-                        result, timer)
+        return _verdict(scan, fine[:VERDICT_POINTS], noise, surface, best, list(zip([best.T] + rivals, scores)),
+                        options, voxel, result, timer)
 
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
@@ -146,7 +146,8 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
     while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / MAX_VOXEL_REFINEMENT:
         surface.coarse(voxel)
         voxel /= 1.25
-    surface.grid_level(0).precompute()
+    for level in range(2):  # gates up to 2 x GATE_CELLS spacings: 3 coarse voxels at the default voxel
+        surface.grid_level(level).precompute()
     return surface
 
 
@@ -241,10 +242,10 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
         from .paper_methods import refine_paper
 
         best = refine_paper(method, fine, surface, contenders[0], gate)
-    rivals = [s.T for s in states[1:]] + _symmetric_twins(best, medium, surface, gate)
-    keep = global_search.distinct([best.T] + rivals, np.arange(len(rivals) + 1)[::-1], medium.mean(axis=0), 5.0,
-                                  0.05 * surface.diagonal)
-    return best, [rivals[i - 1] for i in sorted(keep)[1:]]
+    poses = [best.T] + [s.T for s in states[1:]] + _symmetric_twins(best, medium, surface, gate)
+    # In this order of preference, drop every pose that repeats an earlier one.
+    keep = global_search.distinct(poses, -np.arange(len(poses)), medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
+    return best, [poses[i] for i in keep[1:]]
 
 
 def _symmetric_twins(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list[np.ndarray]:
@@ -261,7 +262,7 @@ def _symmetric_twins(best, medium: np.ndarray, surface: SurfaceModel, gate: floa
 
 def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: float) -> np.ndarray:
     """For each transform, how many points it puts on the model, each weighted by how close it is
-    (1 on the surface, 0 at the gate): a count, so clutter cannot dilute it; one tree query."""
+    (1 on the surface, 0 at the gate): a count, so clutter cannot dilute it; one grid lookup."""
     Ts = np.asarray(transforms).reshape(-1, 4, 4)
     moved = (np.matmul(points[None], Ts[:, :3, :3].transpose(0, 2, 1)) + Ts[:, None, :3, 3]).reshape(-1, 3)
     _, idx, found = surface.nearest_cell(moved, gate)

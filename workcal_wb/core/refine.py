@@ -28,8 +28,8 @@ class RefineState:
     scale: float = float("inf")  # Geman-McClure kernel scale of the last stage (mm)
 
 
-def gauss_newton_step(points: np.ndarray, model_points: np.ndarray, normals: np.ndarray,
-                      residuals: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def gauss_newton_step(points: np.ndarray, normals: np.ndarray, residuals: np.ndarray,
+                      weights: np.ndarray) -> np.ndarray:
     """One weighted point-to-plane step: the small motion (4x4) that best zeroes the residuals.
 
     Linearised about the current pose, a rotation w and translation t change residual i by
@@ -70,7 +70,7 @@ def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, 
         moved, idx = moved[found], idx[found]
         r = model.plane_residuals(moved, idx)
         state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r)))
-        step = gauss_newton_step(moved, model.points[idx], model.normals[idx], r, geman_mcclure(r, scale))
+        step = gauss_newton_step(moved, model.normals[idx], r, geman_mcclure(r, scale))
         state.T = step @ state.T
         state.iterations = it + 1
         angle = np.arccos(np.clip((np.trace(step[:3, :3]) - 1) / 2, -1, 1))

@@ -2,7 +2,9 @@
 
 A mesh is matched as a surface: every sample carries its face's plane, so the point-to-plane
 residual against the nearest sample is the distance to the model surface itself, not to a vertex.
-A point-cloud model (no faces) uses its points with PCA normals.
+A point-cloud model (no faces) uses its points with PCA normals.  What a match needs again and
+again is kept here, per model: the coarse points and FPFH features of the global search, and the
+cell grids (the paper's space binning) that make a nearest-sample lookup one array access.
 """
 from __future__ import annotations
 
@@ -151,7 +153,8 @@ class SurfaceModel:
     def cell_keys(self, points: np.ndarray, cell: float) -> np.ndarray:
         """One int64 key per point naming its cell of a ``cell`` mm grid fixed to the model, so keys
         of scan and model points compare (21 bits per axis, centred, clipped far outside)."""
-        cells = np.clip(np.floor((points - self.points.min(axis=0)) / cell).astype(np.int64) + (1 << 20), 0, (1 << 21) - 1)
+        cells = np.floor((points - self.points.min(axis=0)) / cell).astype(np.int64) + (1 << 20)
+        cells = np.clip(cells, 0, (1 << 21) - 1)
         return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
 
     def occupied_cells(self, cell: float) -> np.ndarray:
@@ -167,11 +170,13 @@ class SurfaceModel:
         if key not in self._coarse:
             from .features import fpfh
 
+            from .global_search import FEATURE_RADIUS, NORMAL_NEIGHBOURS
+
             centroids, rep = pointops.voxel_downsample(self.points, voxel)
-            normals = pointops.estimate_normals(centroids, 2 * voxel)
+            normals = pointops.pca_normals(centroids, NORMAL_NEIGHBOURS)  # as the scan's are estimated
             # Orient like the surface: PCA gives the plane, the samples' normals give the side.
             normals[np.einsum("ij,ij->i", normals, self.normals[rep]) < 0] *= -1
-            self._coarse[key] = (centroids, normals, fpfh(centroids, normals, 5 * voxel))
+            self._coarse[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._coarse[key]
 
     @cached_property

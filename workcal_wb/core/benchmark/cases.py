@@ -198,7 +198,7 @@ def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: flo
 
 
 def large_case(seed: int = 0) -> Case:
-    """About a million points: the car scanned at a 0.2 mm pitch, platform around it included."""
+    """About two million points (1.9 M): the car scanned at a 0.2 mm pitch, platform and L-block around it."""
     from ..simulate.scanner import Scanner
     from ..simulate.scene import build_scene
 

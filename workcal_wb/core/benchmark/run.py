@@ -4,8 +4,9 @@ Each method runs in its own fresh process (so its peak memory is its own) over t
 generated deterministically from the seed in each process.  The model side is prepared once per
 model in each process, outside the timing, as a shop matching scan after scan against one model
 would: WorkCal's SurfaceModel with its coarse features and nearest-sample grid (match.prepare),
-stock's voxel grid, normals and FPFH of the model and the full model cloud with normals.  The processes alternate (WorkCal, stock, WorkCal, stock, ...) and a case's time is its
-fastest round, so a burst of load on the shared machine does not land on one method only.
+stock's voxel grid, normals and FPFH of the model and the full model cloud with normals.  The
+processes alternate (WorkCal, stock, WorkCal, stock, ...) and a case's time is its fastest round,
+so a burst of load on the shared machine does not land on one method only.
 """
 from __future__ import annotations
 
@@ -165,7 +166,8 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
                      triangles=case.model.triangles)
             del case
             large = [_in_child(_run_large, method, path, seed) for method in METHODS]
-    note = None if bunny_folder(shared) else f"Stanford bunny data not found under {shared}: the bunny cases were skipped."
+    note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
+                                              "the bunny cases were skipped.")
     report = _table(per_method, large, seed, quick, rounds, note)
     atomic_write_text(out, report.text)
     return report
@@ -191,7 +193,8 @@ def _summary_rows(per_method: dict) -> tuple[list, dict]:
     lines, numbers = [], {}
     for label, key in selections:
         def pick(rows):
-            return [r for r in rows if key is None or r.group == key or (key == "bunny" and r.group.startswith("bunny"))]
+            return [r for r in rows
+                    if key is None or r.group == key or (key == "bunny" and r.group.startswith("bunny"))]
 
         stock_time = _median([r.time_s for r in pick(stock)])
         for method, rows in ((WORKCAL, pick(ours)), (STOCK, pick(stock))):
@@ -288,7 +291,8 @@ def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, n
         "",
     ]
     if large:
-        text += ["## Large scan", "", "| method | points | status | rot. err (deg) | disp. (mm) | time (s) | peak memory (MB) |",
+        text += ["## Large scan", "",
+                 "| method | points | status | rot. err (deg) | disp. (mm) | time (s) | peak memory (MB) |",
                  "|---|---|---|---|---|---|---|"]
         text += [f"| {e['method']} | {e['points']:,} | {e['status']} | {_fmt(e['rotation_error_deg'], 4)} | "
                  f"{_fmt(e['displacement_mm'])} | {e['time_s']:.2f} | {e['peak_rss_mb']:.0f} |" for e in large]
