@@ -22,7 +22,7 @@ import numpy as np
 
 from .frames import from_rotvec
 from .global_search import kabsch_batch
-from .refine import MAD_TO_SIGMA, RefineState
+from .refine import MAD_TO_SIGMA, RefineState, is_small
 from .surface import SurfaceModel
 
 PAPER_METHODS = ("icp", "hausdorff")
@@ -88,8 +88,7 @@ def _icp(points, surface: SurfaceModel, T, gate, tolerance) -> RefineState:
         step = kabsch_batch(moved[found][None], foot[found][None])[0]
         state.T = step @ state.T
         state.iterations = it + 1
-        angle = np.arccos(np.clip((np.trace(step[:3, :3]) - 1) / 2, -1, 1))
-        if angle < tolerance and np.linalg.norm(step[:3, 3]) < tol_shift:
+        if is_small(step, tolerance, tol_shift):
             break
     return state
 

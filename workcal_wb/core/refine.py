@@ -73,10 +73,15 @@ def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, 
         step = gauss_newton_step(moved, model.normals[idx], r, geman_mcclure(r, scale))
         state.T = step @ state.T
         state.iterations = it + 1
-        angle = np.arccos(np.clip((np.trace(step[:3, :3]) - 1) / 2, -1, 1))
-        if angle < tolerance and np.linalg.norm(step[:3, 3]) < tol_shift:
+        if is_small(step, tolerance, tol_shift):
             break
     return state
+
+
+def is_small(step: np.ndarray, angle_rad: float, shift_mm: float) -> bool:
+    """Whether an iteration's motion is below both limits: the fit has converged."""
+    angle = np.arccos(np.clip((np.trace(step[:3, :3]) - 1) / 2, -1, 1))
+    return angle < angle_rad and np.linalg.norm(step[:3, 3]) < shift_mm
 
 
 def coarse_to_fine(stages: list[np.ndarray], model: SurfaceModel, T: np.ndarray, gate: float,

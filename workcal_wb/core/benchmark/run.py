@@ -265,8 +265,8 @@ def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, n
         "What is cached: each model is prepared once per process, outside the timing, for both methods, as when "
         "scan after scan is matched against one model. For WorkCal that is `match.prepare(SurfaceModel(model))`: "
         "surface samples with normals and their KD-tree, the model's coarse FPFH features (at the default voxel and "
-        "the finer ones a partial scan may need) and the nearest-sample grid (the paper's space binning) within "
-        "16 sample spacings of the surface. For stock Open3D it is the model's voxel grid, normals and FPFH and "
+        "the finer ones a partial scan may need) and the nearest-sample grids (the paper's space binning): cells "
+        "of one sample spacing within 16 spacings of the surface, of two within 32. For stock Open3D it is the model's voxel grid, normals and FPFH and "
         "the full model cloud with normals (the tutorial pipeline would recompute them in every call). Everything "
         "on the scan side is computed inside the timed call. The large scan is matched cold by both: its time "
         "includes preparing the model.",
