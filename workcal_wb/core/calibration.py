@@ -180,8 +180,9 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
 
     Each refit draws the points of both regions with replacement (as many as the match itself fits
     to) and refines both poses from a start nudged off the solution (half the tolerance at the model's
-    edge): where the data pins a pose the refit comes back; where it leaves a motion nearly free (a
-    block seen on two faces slides along them) the refits stay spread, and so does W.  The bound is
+    edge): where the data pins a pose the refit comes back; where it leaves a motion nearly free
+    the refits stay spread, and so does W (a block seen on two faces is centred between its edges
+    in every refit, see edges.py, so there the spread is how well its edges place it).  The bound is
     UNCERTAINTY_FACTOR times the RMS displacement over the refits.  The studies check it against the
     true error (docs/studies.md).
     """

@@ -20,9 +20,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import frames, global_search, pointops
+from .edges import centre_on_edges, has_weak_motion
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
-from .refine import MAD_TO_SIGMA, coarse_to_fine, refine
+from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
 from .result import AMBIGUOUS, FAILED, OK, MatchResult
 from .stability import stability
 from .surface import SurfaceModel
@@ -130,7 +131,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
         gate = voxel  # a guess may be off by a few millimetres
 
     with timer("refine"):
-        best, rivals = _refine(options.method, starts, medium, fine, surface, gate)
+        best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
         scores = inlier_scores(medium, surface, [best.T] + rivals, best.gate)
     with timer("verdict"):
         return _verdict(scan, fine[:VERDICT_POINTS], noise, surface, best, list(zip([best.T] + rivals, scores)),
@@ -219,12 +220,15 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
     return [(refined[i], float(scores[i])) for i in order if scores[i] > 0]
 
 
-def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float):
+def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
+            tolerance: float):
     """The best pose refined on all the fine points, and the distinct rivals refined on the medium ones.
 
     Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
     and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
     can tie with the right one, but only the right one brings the residuals down to the noise.
+    When the robust fit leaves a motion nearly free against a mesh, it goes on against the exact
+    surface and centres the pose between the edges that pin the motion (see edges).
     """
     contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
     if len(contenders) == 1 and method != "robust":
@@ -238,6 +242,9 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
         chosen = states[0]
         best = refine(fine, surface, chosen.T, chosen.gate, chosen.scale, POLISH_ITERATIONS)
         best.iterations += chosen.iterations
+        if surface.is_mesh and has_weak_motion(fine, surface, best.T, best.gate, best.scale):
+            best = refine_exact(fine, surface, best)
+            best.T, best.stability = centre_on_edges(fine, surface, best.T, best.gate, best.sigma, tolerance)
     else:
         from .paper_methods import refine_paper
 
@@ -283,7 +290,10 @@ def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceMode
     fitness = n_in / len(sample)
     coverage = _coverage(moved[found], surface, voxel) if n_in else 0.0
     sigma = MAD_TO_SIGMA * float(np.median(distance)) if n_in else float("inf")
-    stab = stability(moved[found], surface.normals[idx[found]])
+    stab = best.stability if best.stability is not None else stability(moved[found], surface.normals[idx[found]])
+    for held in stab.get("held_by_edges", []):
+        result["warnings"].append(f"{held['motion']} is held only by the model's edges: the data leave "
+                                  f"+/-{held['slack_mm']:.3f} mm of play, the pose is centred in it")
     reasons, status = [], OK
     if n_in < MIN_SCAN_POINTS or fitness < options.min_fitness:
         reasons.append(f"only {fitness:.1%} of the scan points lie on the model (at least "

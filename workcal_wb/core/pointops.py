@@ -210,12 +210,12 @@ def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, spacing: float, seed: int = 0):
     """Points on a mesh surface about ``spacing`` apart: every face's centroid, plus uniform
-    samples on faces larger than a spacing-sized square.  Returns (points, face normals, face ids).
+    samples on faces larger than a spacing-sized square.  Returns (points, face ids).
 
-    Each sample carries the normal and id of the face it lies on, so a point-to-plane residual
-    against it is the exact distance to that face's plane, i.e. to the surface itself.
+    Each sample carries the id of the face it lies on, so a point-to-plane residual against it
+    (with that face's normal) is the exact distance to that face's plane, i.e. to the surface.
     """
-    fn, area = triangle_normals_and_areas(vertices, triangles)
+    _, area = triangle_normals_and_areas(vertices, triangles)
     valid = np.flatnonzero(area > 0)
     extra = np.maximum(np.round(area[valid] / spacing**2).astype(np.int64) - 1, 0)
     face_ids = np.concatenate([valid, np.repeat(valid, extra)])
@@ -227,4 +227,4 @@ def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, spacing: float
     bary = np.concatenate([np.full((len(valid), 2), 1 / 3), np.column_stack([u, v])])
     a, b, c = (vertices[triangles[face_ids, i]] for i in range(3))
     points = a + bary[:, :1] * (b - a) + bary[:, 1:] * (c - a)
-    return points, fn[face_ids], face_ids
+    return points, face_ids

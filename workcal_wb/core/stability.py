@@ -22,18 +22,24 @@ def stability(points: np.ndarray, normals: np.ndarray, threshold: float = FREE_M
     the frame of ``points``; JSON-ready."""
     if len(points) < 6:
         return {"ratio": 0.0, "eigenvalues": [], "free_motions": ["too few matched points"], "constrained": False}
+    vals, vecs, centre, radius = gelfand(points, normals)
+    free = [describe_motion(vecs[:, i], centre, radius) for i in range(6) if vals[i] < threshold]
+    return {"ratio": float(vals[0]), "eigenvalues": vals.tolist(), "free_motions": free,
+            "constrained": not free}
+
+
+def gelfand(points: np.ndarray, normals: np.ndarray):
+    """(eigenvalues normalised to the largest, ascending; eigenvectors [rotation x radius,
+    translation] as columns; centre; RMS radius) of the point-to-plane constraint matrix."""
     centre = points.mean(axis=0)
     p = points - centre
     radius = np.sqrt((p**2).sum(axis=1).mean()) or 1.0
     J = np.hstack([np.cross(p / radius, normals), normals])
     vals, vecs = np.linalg.eigh(J.T @ J)
-    vals = np.maximum(vals, 0) / max(vals[-1], 1e-300)
-    free = [_describe_motion(vecs[:, i], centre, radius) for i in range(6) if vals[i] < threshold]
-    return {"ratio": float(vals[0]), "eigenvalues": vals.tolist(), "free_motions": free,
-            "constrained": not free}
+    return np.maximum(vals, 0) / max(vals[-1], 1e-300), vecs, centre, radius
 
 
-def _describe_motion(v: np.ndarray, centre: np.ndarray, radius: float) -> str:
+def describe_motion(v: np.ndarray, centre: np.ndarray, radius: float) -> str:
     """A free motion as words: a rotation about an axis through a point (the screw axis of the
     twist, nearest the centre) unless its axis lies more than ROTATION_REACH radii away, where it
     is as good as a translation."""

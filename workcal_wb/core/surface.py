@@ -96,11 +96,14 @@ class SurfaceModel:
         self.name = model.name
         self.diagonal = model.diagonal()
         self.is_mesh = model.is_mesh
+        self.face_normals = None
         if model.is_mesh:
             spacing = self.diagonal / SAMPLES_PER_DIAGONAL
-            points, normals, _ = pointops.sample_triangles(model.points, model.triangles, spacing, seed)
+            points, face_ids = pointops.sample_triangles(model.points, model.triangles, spacing, seed)
+            self.face_normals = pointops.triangle_normals_and_areas(model.points, model.triangles)[0]
             if pointops.signed_volume(model.points, model.triangles) < 0:
-                normals = -normals  # faces wound inward (e.g. the Stanford bunny): make normals outward
+                self.face_normals = -self.face_normals  # wound inward (e.g. the Stanford bunny): make them outward
+            normals = self.face_normals[face_ids]
         else:
             points = model.points
             spacing = pointops.median_spacing(points)
@@ -192,18 +195,29 @@ class SurfaceModel:
         return flips
 
     @cached_property
+    def _bvh(self):
+        """open3d's BVH of the mesh and the origin its vertices are given from (the model's centre,
+        so its float32 coordinates keep ~1e-4 mm)."""
+        from .errors import require_open3d
+
+        o3d = require_open3d()
+        origin = self.vertices.mean(axis=0)
+        scene = o3d.t.geometry.RaycastingScene()
+        scene.add_triangles(o3d.core.Tensor((self.vertices - origin).astype(np.float32)),
+                            o3d.core.Tensor(self.triangles.astype(np.uint32)))
+        return scene, lambda points: o3d.core.Tensor((points - origin).astype(np.float32)), origin
+
+    def closest_points(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(exact closest point on the mesh, outward normal of its face) for each point; meshes only."""
+        scene, query, origin = self._bvh
+        answer = scene.compute_closest_points(query(points))
+        closest = answer["points"].numpy().astype(float) + origin
+        return closest, self.face_normals[answer["primitive_ids"].numpy().astype(np.int64)]
+
+    @cached_property
     def exact_distance(self):
         """Exact unsigned point-to-mesh distance function (open3d BVH), or None for point models."""
         if not self.is_mesh:
             return None
-        from .errors import require_open3d
-
-        o3d = require_open3d()
-        scene = o3d.t.geometry.RaycastingScene()
-        scene.add_triangles(o3d.core.Tensor(self.vertices.astype(np.float32)),
-                            o3d.core.Tensor(self.triangles.astype(np.uint32)))
-
-        def distance(points: np.ndarray) -> np.ndarray:
-            return scene.compute_distance(o3d.core.Tensor(points.astype(np.float32))).numpy().astype(float)
-
-        return distance
+        scene, query, _ = self._bvh
+        return lambda points: scene.compute_distance(query(points)).numpy().astype(float)
