@@ -52,7 +52,8 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
                     tolerance_mm: float) -> tuple[np.ndarray, dict]:
     """Move ``T`` (scan -> model) to the middle of the edge interval along each weak motion and
     return it with the stability of the fit (see stability.stability) extended by
-    ``held_by_edges``: for each such motion its description, eigenvalue and half-width ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way are listed as
+    ``held_by_edges``: for each such motion its description, eigenvalue and half-width
+    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way are listed as
     free when their eigenvalue is below FREE_MOTION_RATIO."""
     points = points[surface.nearest_cell(frames.apply(T, points), gate + surface.spacing)[2]]  # clutter is no edge
     moved = frames.apply(T, points)
@@ -98,8 +99,9 @@ def slide(twist, centre, amount: float) -> np.ndarray:
 
 
 def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, threshold: float, reach: float):
-    """(lo, hi) amounts of ``twist`` between which no more than EXTRA_OFF_POINTS points beyond the
-    fewest leave the surface, or None when the slide meets no edge within ``reach`` on a side."""
+    """(lo, hi) amounts of ``twist`` between which the count of points off the surface stays
+    within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when the slide
+    meets no edge within ``reach`` on a side."""
     def off(points, amount):
         return surface.exact_distance(frames.apply(slide(twist, centre, amount), points)) > threshold
 
