@@ -8,7 +8,7 @@ pose once it is close.  Point-to-plane converges in a few Gauss-Newton steps per
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -95,7 +95,7 @@ def refine_exact(points: np.ndarray, model: SurfaceModel, state: RefineState,
     from the edge (the gradient of the distance), not along a face normal that ignores the edge.
     Such a motion converges by a constant factor per step, hence the many steps allowed.
     """
-    state = RefineState(state.T.copy(), state.iterations, state.sigma, state.gate, state.scale)
+    state = replace(state, T=state.T.copy())
     tol_shift = tolerance * model.diagonal
     for _ in range(max_iterations):
         moved = points @ state.T[:3, :3].T + state.T[:3, 3]
