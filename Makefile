@@ -1,4 +1,4 @@
-# WorkCal: `make demo` and `make test` set up everything they need on Debian 12 (as root), then run.
+# WorkCal: `make demo` and `make test` set up everything they need on Debian 12 or 13 (as root), then run.
 
 PYTHON        := /usr/bin/python3
 BUILD         := $(CURDIR)/build
@@ -7,11 +7,12 @@ DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
                  xvfb xauth libgl1-mesa-dri
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
-FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1
+FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output
 XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
-PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR)
+# PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
+PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup demo test test-headless test-gui bench clean
+.PHONY: setup demo test test-headless test-gui test-other-freecad bench clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -30,8 +31,15 @@ test-headless: setup
 test-gui: setup
 	$(FREECAD_ENV) $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py
 
+# The same suites on the other Debian release (FreeCAD 1.0 from Debian 12, 0.20 from Debian 13), in a
+# debootstrap chroot cached under build/ (see .ci/other-debian).
+test-other-freecad:
+	.ci/other-debian test
+
 bench: setup
 	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
 
+# Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:
+	@! grep -q " $(BUILD)/" /proc/self/mountinfo || { echo "make clean: something is mounted under $(BUILD); not removing it" >&2; exit 1; }
 	rm -rf $(BUILD)

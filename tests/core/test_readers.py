@@ -536,7 +536,7 @@ def test_bunny_scan_and_mesh_match_open3d(bunny):
     mesh = o3d.io.read_triangle_mesh(str(bunny / "bun_zipper.ply"))
     np.testing.assert_array_equal(model.points, np.asarray(mesh.vertices) * 1000)
     np.testing.assert_array_equal(model.triangles, np.asarray(mesh.triangles))
-    assert 150 < model.points.ptp(axis=0).max() < 160  # "about 155 x 154 x 121 mm"
+    assert 150 < np.ptp(model.points, axis=0).max() < 160  # "about 155 x 154 x 121 mm"
 
 
 def test_bunny_read_as_mm_warns_about_the_unit(bunny):

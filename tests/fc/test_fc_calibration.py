@@ -12,6 +12,7 @@ from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc import placed_model  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of as matrix  # noqa: E402
 
@@ -192,17 +193,50 @@ def test_failed_calibration_is_kept_with_its_reasons(simulated, document):
     assert result.status == cal.Status
 
 
+def placed_models(doc):
+    return [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
+
+
 def test_placed_model_follows_w(simulated, document):
     scene, _ = simulated
     doc, objs = document
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], placed_model=True,
                               seed=SEED)
-    links = [o for o in cal.InList if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE]
-    assert len(links) == 1
-    link = links[0]
-    assert link.LinkedObject == objs["workpiece"]
-    np.testing.assert_allclose(matrix(link.Placement), matrix(cal.WMatrix), atol=1e-9)
-    assert co.show_placed_model(cal) == link  # not duplicated
+    [placed] = placed_models(doc)
+    assert placed.Source == objs["workpiece"] and placed.Calibration == cal
+    W = matrix(cal.WMatrix)
+    np.testing.assert_allclose(matrix(placed.Placement), W, atol=1e-9)
+    # What the view shows is the workpiece model moved by W: X-A in the robot base frame B.
+    shown = np.array([tuple(v) for v in placed.Mesh.Topology[0]])
+    np.testing.assert_allclose(shown, frames.apply(W, scene.workpiece_model().points), atol=2e-4)  # float32 mesh
+    assert placed_model.make_placed_model(cal) == placed  # not duplicated
+    # It follows the model and W: move the model in its file's frame X, the calibration runs again and
+    # the copy still lands where the scan saw the part.
+    objs["workpiece"].Placement = FreeCAD.Placement(FreeCAD.Vector(5, 0, 0), FreeCAD.Rotation())
+    doc.recompute()
+    moved_W = matrix(cal.WMatrix)
+    np.testing.assert_allclose(matrix(placed.Placement), moved_W @ frames.rigid(translation=[5, 0, 0]), atol=1e-9)
+    np.testing.assert_allclose(matrix(placed.Placement), W, atol=0.05)
+
+
+def test_undo_redo_of_a_calibration_with_its_placed_model(simulated, document):
+    """FreeCAD 1.0 leaves a nameless ghost when the creation of an App::Link is undone, duplicates it
+    on redo and crashes when the document closes (FreeCAD issues 17900, 18326): undo and redo must
+    give back exactly the objects that were there, and closing must work."""
+    doc, objs = document
+    doc.UndoMode = 1
+    before = names(doc)
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], placed_model=True,
+                              resamples=2, seed=SEED)
+    after = names(doc)
+    assert len(after) == len(before) + 2 and len(placed_models(doc)) == 1
+    for _ in range(2):
+        doc.undo()
+        assert [o.Name for o in doc.Objects if o.Name is None] == [] and names(doc) == before
+        doc.redo()
+        assert names(doc) == after and len(placed_models(doc)) == 1
+    assert doc.getObject(cal.Name).Status == "ok"
+    FreeCAD.closeDocument(doc.Name)  # used to crash FreeCAD 1.0
 
 
 def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):

@@ -55,7 +55,9 @@ def test_subdirectory_is_the_repository_root(workbench):
 
 
 def test_runs_on_freecad_0_20(metadata, workbench):
-    assert workbench.FreeCADMin.startswith("0.20")
+    # Stated for the package (the 1.1 Addon Manager asks for it there) and for the workbench (what the
+    # 0.20 loader reads); never above 0.20, or Debian 12's FreeCAD skips the workbench.
+    assert metadata.FreeCADMin.startswith("0.20") and workbench.FreeCADMin.startswith("0.20")
     assert metadata.supportsCurrentFreeCAD() and workbench.supportsCurrentFreeCAD()
 
 
@@ -68,7 +70,17 @@ def test_icon_files_exist(metadata, workbench):
 
 
 def test_python_dependencies(workbench):
+    import xml.etree.ElementTree as ET
+
     assert {d["package"] for d in workbench.Depend} >= {"numpy", "scipy", "open3d"}
+    # Packages off the Addon Manager's allow-list must be optional, or it refuses to install WorkCal.
+    ns = {"p": "https://wiki.freecad.org/Package_Metadata"}
+    depends = ET.parse(ROOT / "package.xml").getroot().findall(".//p:workbench/p:depend", ns)
+    assert {d.text: d.get("optional") for d in depends if d.text == "open3d"} == {"open3d": "true"}
+
+
+def test_author_and_maintainer(metadata):
+    assert metadata.Author and metadata.Maintainer
 
 
 def test_translation_template_is_a_qt_ts_file():

@@ -5,7 +5,8 @@
 * ``shoot(name)``: save the active 3D view as ``<output_dir>/<name>.png`` and return the path.
 * ``report``: the Report view; ``report.mark()`` then ``report.since()`` gives what was printed after.
 * ``view_driver``: synthetic mouse and key events sent through the real 3D view (Coin pixel positions).
-* ``pump(seconds)``: run the event loop for a while.
+* ``pump(seconds)``: run the event loop for a while; ``settle()``: wait until the 3D view stops changing.
+* ``assert_ok_cancel(panel)``: the panel's standard buttons are OK and Cancel.
 Message boxes are off (``task_panels.common.INTERACTIVE = False``) so no modal dialog blocks a test;
 messages still reach the Report view, which is where tests read them.
 """
@@ -20,6 +21,7 @@ else:
     import FreeCADGui
 
     from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets, common
+    from workcal_wb.gui.view import look
 
 SHOT_SIZE = (1000, 750)
 
@@ -27,6 +29,43 @@ SHOT_SIZE = (1000, 750)
 def pump(seconds: float = 0.05) -> None:
     """Process events for ``seconds`` (at least once)."""
     common.process_events(seconds)
+
+
+def settle(timeout_s: float = 5.0, quiet_s: float = 0.3) -> None:
+    """Wait until the active 3D view stops changing: FreeCAD 1.x narrows it about a second after a task
+    panel opens, and animates camera moves.  Screen positions computed before that are stale."""
+    import time
+
+    view = active_view()
+
+    def state():
+        return tuple(view.getSize()), view.getCamera()
+
+    last, since = state(), time.monotonic()
+    end = since + timeout_s
+    while time.monotonic() < end:
+        pump(0.05)
+        now = state()
+        if now != last:
+            last, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet_s:
+            return
+
+
+def assert_ok_cancel(panel) -> None:
+    """The task panel asks FreeCAD for OK and Cancel in a form every PySide accepts (Qt6 flags are not ints)."""
+    box = QtWidgets.QDialogButtonBox(panel.getStandardButtons())
+    assert box.button(QtWidgets.QDialogButtonBox.Ok) and box.button(QtWidgets.QDialogButtonBox.Cancel)
+
+
+@pytest.fixture(name="assert_ok_cancel")
+def assert_ok_cancel_fixture():
+    return assert_ok_cancel
+
+
+@pytest.fixture(name="settle")
+def settle_fixture():
+    return settle
 
 
 @pytest.fixture(name="pump")
@@ -107,7 +146,7 @@ def shoot(output_dir):
     def save(name: str, fit: bool = False) -> Path:
         view = active_view()
         if fit:
-            view.fitAll()
+            look(view)
         pump(0.05)
         path = Path(output_dir) / f"{name}.png"
         view.saveImage(str(path), SHOT_SIZE[0], SHOT_SIZE[1], "White")
@@ -206,3 +245,12 @@ class ViewDriver:
 @pytest.fixture
 def view_driver(doc):
     return ViewDriver(active_view())
+
+
+def pytest_runtest_logreport(report):
+    """Print a failure as soon as it happens: if FreeCAD crashes later, the cause is already on the terminal."""
+    if report.failed:
+        import sys
+
+        sys.stdout.write(f"\n--- {report.nodeid} failed ({report.when}) ---\n{report.longreprtext}\n")
+        sys.stdout.flush()

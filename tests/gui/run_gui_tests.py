@@ -14,6 +14,8 @@ TESTS = os.path.dirname(os.path.abspath(__file__))
 def _run():
     import pytest
 
+    # FreeCAD 1.x sends sys.stdout to its Report view only; the run's log belongs on the terminal.
+    sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
     rc = pytest.main(["-q", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), TESTS])
     sys.stdout.flush()
     os._exit(int(rc))  # FreeCAD ignores QApplication.exit codes; leave with pytest's status

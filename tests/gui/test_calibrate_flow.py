@@ -24,10 +24,12 @@ from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc import placed_model  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtWidgets  # noqa: E402
 from workcal_wb.gui.task_panels import common  # noqa: E402
+from workcal_wb.gui.view import without_animation  # noqa: E402
 
 ROT_TOL_DEG, TRANS_TOL_MM = 0.05, 0.1
 SEED = 0  # calibration seed (the default)
@@ -66,6 +68,7 @@ def pump(seconds=0.05):
     common.process_events(seconds)
 
 
+
 # Looking from the scanner: along +z of S with -y of S up (camera looks along its own -z).
 FROM_SCANNER = FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 180)
 
@@ -82,11 +85,12 @@ def screenshot(output_dir, name, only=None, orientation=None):
                 hidden.append(vobj)
         for obj in only:
             obj.ViewObject.Visibility = True
-    if orientation is not None:
-        view.setCameraOrientation(orientation)
-    else:
-        view.viewIsometric()
-    view.fitAll()
+    with without_animation(view):
+        if orientation is not None:
+            view.setCameraOrientation(orientation)
+        else:
+            view.viewIsometric()
+        view.fitAll()
     pump(0.1)
     path = os.path.join(str(output_dir), name)
     try:
@@ -186,19 +190,20 @@ def test_03_bad_input_reports_and_changes_nothing(step, report):
     doc.removeObject(group.Name)
 
 
-def test_04_calibrate_through_the_task_panel(step, output_dir):
+def test_04_calibrate_through_the_task_panel(step, output_dir, assert_ok_cancel):
     from workcal_wb.gui.commands.calibrate import open_panel
 
     flow = step
     doc, scene = flow["doc"], flow["scene"]
     before, undo_before = object_names(doc), doc.UndoCount
     panel = open_panel(doc)
+    assert_ok_cancel(panel)
     assert panel._chosen("scan") == flow["scan_obj"] and panel._chosen("workpiece") == flow["workpiece"]
     assert panel._chosen("reference") == flow["reference"]
     panel.set_options(method="robust", tolerance_mm=0.3, regions="Auto", seed=SEED, placed_model=True)
-    ticks = []
+    ticks = []  # while the worker thread runs (adding the result afterwards is main-thread work)
     timer = QtCore.QTimer()
-    timer.timeout.connect(lambda: ticks.append(time.monotonic()))
+    timer.timeout.connect(lambda: panel.runner is not None and panel.runner.running and ticks.append(time.monotonic()))
     timer.start(20)
     progress_seen = []
     ok = task_button("ok")
@@ -237,10 +242,25 @@ def test_04_calibrate_through_the_task_panel(step, output_dir):
     vp = cal.ViewObject.Proxy
     assert vp.switch.whichChild.getValue() == 0 and vp.labels.getNumChildren() == 4  # colour + B, S, X
     assert len(cal.ViewObject.LineColorArray) == 9  # red, green, blue axes
+    # The right-click menu (built with Qt6-safe calls) offers the placed model and the deviation map;
+    # asking for the placed model again does not add a second one.
+    menu = QtWidgets.QMenu()
+    vp.setupContextMenu(cal.ViewObject, menu)
+    actions = {a.text(): a for a in menu.actions()}
+    assert set(actions) >= {"Show workpiece model in the robot frame", "Deviation map"}
+    placed_count = len([o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE])
+    actions["Show workpiece model in the robot frame"].trigger()
+    assert len([o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]) == placed_count == 1
+    # The placed model is drawn (a Python feature with no display mode would not be) and sits where
+    # the workpiece stands beside the reference in B.
+    [placed] = [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
+    assert placed.ViewObject.Visibility and placed.ViewObject.DisplayMode in placed.ViewObject.listDisplayModes()
+    shown = np.array([tuple(v) for v in placed.Mesh.Topology[0]])
+    np.testing.assert_allclose(shown, frames.apply(scene.W, scene.workpiece_model().points), atol=0.5)
     flow["cal"] = cal
     screenshot(output_dir, "04_calibrated.png")
     screenshot(output_dir, "04_placed_model_on_reference.png",
-               only=[o for o in doc.Objects if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE]
+               only=[o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
                + [flow["reference"], cal])
 
 
@@ -318,7 +338,7 @@ def test_07_transform_and_export_toolpath(step, output_dir):
     assert error.max() < 0.1
     screenshot(output_dir, "07_toolpath_in_B.png",
                only=[path_obj, flow["reference"]]
-               + [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == co.PLACED_MODEL_ROLE])
+               + [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE])
 
     for fmt, ext in (("krl", ".src"), ("csv", ".csv"), ("rapid", ".mod"), ("urscript", ".script"),
                      ("fanuc", ".ls"), ("gcode", ".nc")):

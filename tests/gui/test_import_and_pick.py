@@ -25,6 +25,7 @@ from workcal_wb.fc import setup as fc_setup  # noqa: E402
 from workcal_wb.gui import region_display  # noqa: E402
 from workcal_wb.gui.commands import import_scan, models, regions  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtWidgets  # noqa: E402
+from workcal_wb.gui.view import look  # noqa: E402
 
 EDGE_PX = 1.5
 
@@ -71,19 +72,30 @@ def oblique_view(*objects):
     for obj in objects[0].Document.Objects:
         if getattr(obj, "ViewObject", None) is not None:
             obj.ViewObject.Visibility = obj in objects
-    view.setCameraOrientation(FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 150))
-    view.fitAll()
+    look(view, FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 150))
 
 
 def look_from_scanner():
     """Look along +Z of S (the scanner's viewing direction), the whole scan in view."""
-    view = FreeCADGui.ActiveDocument.ActiveView
-    view.setCameraOrientation(FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 180))
-    view.fitAll()
+    look(FreeCADGui.ActiveDocument.ActiveView, FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 180))
+
+
+@pytest.fixture
+def open_pick_panel(settle):
+    """Opens the pick panel and returns it once the 3D view has its final size (FreeCAD 1.x narrows
+    the view after the panel opens, which moves every point on the screen)."""
+
+    def open_panel(obj, **options):
+        panel = regions.open_pick_panel(obj, **options)
+        settle()
+        return panel
+
+    return open_panel
+
 
 
 def screen_xy(points) -> np.ndarray:
-    """Every point projected with FreeCAD's own getPointOnScreen (Coin pixels)."""
+    """Every point projected with FreeCAD's own getPointOnScreen (Coin pixels) as the view is now."""
     view = FreeCADGui.ActiveDocument.ActiveView
     return np.array([view.getPointOnScreen(FreeCAD.Vector(*p)) for p in np.asarray(points).tolist()], dtype=float)
 
@@ -205,10 +217,12 @@ def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):
 
 # --- picking ----------------------------------------------------------------------------------
 
-def test_box_pick_selects_the_points_in_the_box(imported, scene, view_driver, shoot, pump):
+def test_box_pick_selects_the_points_in_the_box(open_pick_panel, imported, scene, view_driver, shoot, pump,
+                                                assert_ok_cancel):
+    panel = open_pick_panel(imported, shape="box")
+    assert_ok_cancel(panel)
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     start, end = workpiece_box(xy, scene["workpiece"])
-    panel = regions.open_pick_panel(imported, shape="box")
     assert FreeCADGui.Control.activeDialog() and panel.tool.active
     camera_before = FreeCADGui.ActiveDocument.ActiveView.getCameraNode().orientation.getValue().getValue()
     FreeCADGui.Selection.clearSelection()
@@ -237,10 +251,10 @@ def lasso_corners(start, end):
     return [(int(cx + rx * np.cos(a)), int(cy + ry * np.sin(a))) for a in angles]
 
 
-def test_lasso_pick_closed_by_right_click_and_by_enter(imported, scene, view_driver, shoot):
+def test_lasso_pick_closed_by_right_click_and_by_enter(open_pick_panel, imported, scene, view_driver, shoot):
+    panel = open_pick_panel(imported, shape="lasso")
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     start, end = workpiece_box(xy, scene["workpiece"], 15, 85)
-    panel = regions.open_pick_panel(imported, shape="lasso")
     corners = lasso_corners(start, end)
     for corner in corners:
         view_driver.click(*corner)
@@ -268,11 +282,11 @@ def test_lasso_pick_closed_by_right_click_and_by_enter(imported, scene, view_dri
     panel.accept()
 
 
-def test_add_subtract_and_one_point_one_region(imported, scene, view_driver, shoot):
+def test_add_subtract_and_one_point_one_region(open_pick_panel, imported, scene, view_driver, shoot):
+    panel = open_pick_panel(imported, shape="box")
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     (x0, y0), (x1, y1) = workpiece_box(xy, scene["workpiece"], 10, 90)
     xm = (x0 + x1) // 2
-    panel = regions.open_pick_panel(imported, shape="box")
     view_driver.drag((x0, y0), (xm, y1))
     left = regions_now(imported)["workpiece"]
     view_driver.drag((xm, y0), (x1, y1), modifiers=QtCore.Qt.ShiftModifier)  # Shift: add
@@ -301,19 +315,19 @@ def test_add_subtract_and_one_point_one_region(imported, scene, view_driver, sho
     panel.accept()
 
 
-def test_cancel_restores_and_ok_is_one_undo_step(imported, scene, view_driver):
-    xy = screen_xy(fc_scan.scan_cloud(imported).points)
-    start, end = workpiece_box(xy, scene["workpiece"])
+def test_cancel_restores_and_ok_is_one_undo_step(open_pick_panel, imported, scene, view_driver):
     doc = imported.Document
     undo_before = doc.UndoCount
-    panel = regions.open_pick_panel(imported)
+    panel = open_pick_panel(imported)
+    xy = screen_xy(fc_scan.scan_cloud(imported).points)
+    start, end = workpiece_box(xy, scene["workpiece"])
     view_driver.drag(start, end)
     view_driver.drag(start, (end[0], (start[1] + end[1]) // 2), modifiers=QtCore.Qt.ControlModifier)
     assert regions_now(imported)["workpiece"]
     panel.reject()
     assert regions_now(imported) == {"workpiece": set(), "reference": set()}
     assert doc.UndoCount == undo_before and region_display.shown_points(imported) == {}
-    panel = regions.open_pick_panel(imported)
+    panel = open_pick_panel(imported)
     view_driver.drag(start, end)
     view_driver.drag(start, (end[0], (start[1] + end[1]) // 2), modifiers=QtCore.Qt.ShiftModifier)
     picked = regions_now(imported)["workpiece"]
@@ -325,10 +339,10 @@ def test_cancel_restores_and_ok_is_one_undo_step(imported, scene, view_driver):
     assert regions_now(imported)["workpiece"] == picked
 
 
-def test_regions_survive_save_and_reopen(imported, scene, view_driver, output_dir, shoot, pump):
+def test_regions_survive_save_and_reopen(open_pick_panel, imported, scene, view_driver, output_dir, shoot, pump):
+    panel = open_pick_panel(imported)
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     start, end = workpiece_box(xy, scene["workpiece"])
-    panel = regions.open_pick_panel(imported)
     view_driver.drag(start, end)
     panel.set_role("reference")
     rs, re_ = workpiece_box(xy, scene["reference"])
@@ -354,12 +368,14 @@ def test_regions_survive_save_and_reopen(imported, scene, view_driver, output_di
 
 # --- automatic regions and models --------------------------------------------------------------
 
-def test_choose_models_panel_and_automatic_regions(imported, scene, shoot, report, output_dir, pump):
+def test_choose_models_panel_and_automatic_regions(imported, scene, shoot, report, output_dir, pump,
+                                                  assert_ok_cancel):
     doc = imported.Document
     workpiece = add_model(doc, scene["scene"].workpiece_model(), "CarModel")
     reference = add_model(doc, scene["scene"].reference_model(), "ReferenceModel")
     doc.recompute()
     panel = models.open_panel(doc)
+    assert_ok_cancel(panel)
     assert panel.selected()["scan"] is imported  # the import made it the scan
     panel.select("workpiece", workpiece)
     panel.select("reference", reference)
@@ -500,11 +516,12 @@ def test_bad_scan_file_reports_and_changes_nothing(doc, tmp_path, report, scan_u
     assert os.path.exists(bad)
 
 
-def test_task_dialog_closed_from_outside_stops_the_tool_and_rolls_back(imported, scene, view_driver, pump):
+def test_task_dialog_closed_from_outside_stops_the_tool_and_rolls_back(open_pick_panel, imported, scene, view_driver,
+                                                                     pump):
+    undo_before = imported.Document.UndoCount
+    panel = open_pick_panel(imported)
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     start, end = workpiece_box(xy, scene["workpiece"])
-    undo_before = imported.Document.UndoCount
-    panel = regions.open_pick_panel(imported)
     view_driver.drag(start, end)
     assert regions_now(imported)["workpiece"]
     FreeCADGui.Control.closeDialog()  # neither OK nor Cancel

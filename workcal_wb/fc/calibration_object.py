@@ -34,6 +34,7 @@ from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.result import FAILED, OK, CalibrationResult
 from workcal_wb.fc import prefs
+from workcal_wb.fc.placed_model import make_placed_model
 from workcal_wb.fc.placements import freecad_matrix, placement
 from workcal_wb.fc.proxies import Feature, ViewProvider
 from workcal_wb.fc.undo import transaction
@@ -42,7 +43,6 @@ translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
 ROLE = "WorkCalCalibration"  # value of the hidden WorkCalRole property, how commands find these objects
-PLACED_MODEL_ROLE = "WorkCalPlacedModel"
 REGION_MODES = list(prefs.REGION_MODES)
 FRAME_FRACTION = 0.35  # triad axis length as a fraction of the workpiece model's diagonal (FrameSize 0)
 DEFAULT_FRAME_MM = 50.0
@@ -484,7 +484,7 @@ def make_calibration(doc, scan, workpiece, reference, *, tolerance_mm=None, meth
             ViewProviderCalibration(obj.ViewObject)
         obj.recompute()
         if placed_model and result.W is not None:
-            show_placed_model(obj)
+            make_placed_model(obj)
         doc.recompute()
     report(result, obj.Label)
     return obj
@@ -503,38 +503,20 @@ def _write_inputs(obj, scan, workpiece, reference, toolpath, inputs: Inputs, reg
     obj.Regions = regions or ("Picked" if inputs.regions is not None else "Auto")
 
 
-def update_calibration(obj, result: CalibrationResult, inputs: Inputs, regions: str | None = None) -> None:
+def update_calibration(obj, result: CalibrationResult, inputs: Inputs, regions: str | None = None,
+                       placed_model: bool = False) -> None:
     """Store a result computed elsewhere (e.g. re-run from the task panel) on an existing object,
-    with the options it was computed with, in one undo step."""
+    with the options it was computed with, in one undo step (with the placed model when asked for)."""
     doc = obj.Document
     with transaction(doc, translate("WorkCal", "WorkCal calibration")):
         toolpath = obj.Toolpath if obj.Toolpath is not None else (obj.ToolpathFile or None)
         _write_inputs(obj, obj.Scan, obj.Workpiece, obj.Reference, toolpath, inputs, regions or obj.Regions)
         obj.Proxy._prepared = (inputs.key(), inputs, result)
         obj.touch()
+        if placed_model and result.W is not None:
+            make_placed_model(obj)
         doc.recompute()
     report(result, obj.Label)
-
-
-def show_placed_model(obj):
-    """A link to the workpiece model placed by W, i.e. shown in the robot base frame B; it follows
-    W through an expression on its Placement.  Returns the (new or existing) link."""
-    for other in obj.InList:
-        if getattr(other, "WorkCalRole", None) == PLACED_MODEL_ROLE:
-            return other
-    if obj.Workpiece is None:
-        raise InputError(f"{obj.Label}: has no workpiece model to place")
-    doc = obj.Document
-    link = doc.addObject("App::Link", f"{obj.Name}_PlacedModel")
-    link.addProperty("App::PropertyString", "WorkCalRole", "Base", "What this object is to WorkCal")
-    link.setEditorMode("WorkCalRole", 2)
-    link.WorkCalRole = PLACED_MODEL_ROLE
-    link.LinkedObject = obj.Workpiece
-    link.LinkTransform = True  # the model's own placement (its frame X in the file) comes first, then W
-    link.Label = f"{obj.Workpiece.Label} in B ({obj.Label})"
-    link.setExpression("Placement", f"{obj.Name}.Placement")
-    link.recompute()
-    return link
 
 
 # ------------------------------------------------------------------------------------------- view
@@ -618,15 +600,10 @@ class ViewProviderCalibration(ViewProvider):
         return True
 
     def setupContextMenu(self, vobj, menu):
-        from workcal_wb.gui.task_panels import QtWidgets
-
-        obj = vobj.Object
-        action = QtWidgets.QAction(translate("WorkCal", "Show workpiece model in the robot frame"), menu)
-        action.triggered.connect(lambda: _placed_model_action(obj))
-        menu.addAction(action)
-        action = QtWidgets.QAction(translate("WorkCal", "Deviation map"), menu)
-        action.triggered.connect(lambda: _deviation_action(obj))
-        menu.addAction(action)
+        obj = vobj.Object  # QMenu.addAction(text): QAction moved from QtWidgets to QtGui in Qt6
+        menu.addAction(translate("WorkCal", "Show workpiece model in the robot frame")).triggered.connect(
+            lambda: _placed_model_action(obj))
+        menu.addAction(translate("WorkCal", "Deviation map")).triggered.connect(lambda: _deviation_action(obj))
 
     def claimChildren(self):
         return []
@@ -636,7 +613,7 @@ def _placed_model_action(obj):
     try:
         doc = obj.Document
         with transaction(doc, translate("WorkCal", "Show placed workpiece model")):
-            show_placed_model(obj)
+            make_placed_model(obj)
             doc.recompute()
     except WorkCalError as exc:
         error(f"WorkCal: {exc}")

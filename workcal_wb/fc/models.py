@@ -33,7 +33,7 @@ def _label(obj) -> str:
     return getattr(obj, "Label", None) or getattr(obj, "Name", None) or repr(obj)
 
 
-def _kind(obj):
+def kind_of(obj):
     """("mesh"|"points"|"shape"|None, data) without expensive work."""
     kind, kernel = fc_scan.kernel_of(obj)
     if kind is not None:
@@ -51,12 +51,12 @@ def _kind(obj):
 
 def is_model_object(obj) -> bool:
     """Whether ``obj`` is of a kind ``model_cloud`` accepts (it may still be empty)."""
-    return _kind(obj)[0] is not None
+    return kind_of(obj)[0] is not None
 
 
 def check_model(obj) -> str:
     """Raise InputError naming ``obj`` unless it is a usable model; returns its kind.  Cheap: no tessellation."""
-    kind, data = _kind(obj)
+    kind, data = kind_of(obj)
     label = _label(obj)
     if kind is None:
         type_id = getattr(obj, "TypeId", type(obj).__name__)
@@ -83,7 +83,7 @@ def deflection_for(shape) -> float:
 def model_cloud(obj, deflection_mm: float | None = None) -> Cloud:
     """The model as a Cloud in mm: triangles for shapes and meshes, points for point clouds."""
     kind = check_model(obj)
-    data = _kind(obj)[1]
+    data = kind_of(obj)[1]
     label = _label(obj)
     if kind == "shape":
         vertices, facets = data.tessellate(deflection_mm or deflection_for(data))

@@ -27,7 +27,7 @@ from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.fc import scan as fc_scan
 from workcal_wb.fc.placements import container_matrix
 from workcal_wb.gui import region_display
-from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+from workcal_wb.gui.task_panels import OK_CANCEL, QtCore, QtGui, QtWidgets
 
 translate = FreeCAD.Qt.translate
 
@@ -506,7 +506,7 @@ class PickPanel:
 
     # task dialog protocol
     def getStandardButtons(self):
-        return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+        return OK_CANCEL
 
     def accept(self):
         self.tool.stop()

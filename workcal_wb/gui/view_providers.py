@@ -1,4 +1,4 @@
-"""View providers of WorkCal's scan and setup objects (tree icons, region overlay, double-click).
+"""View providers of WorkCal's scan, setup and placed-model objects (tree icons, region overlay, double-click).
 
 ``workcal_wb.gui.workbench`` registers them with ``workcal_wb.fc.init.VIEW_PROVIDERS`` at GUI start-up,
 so objects made by the FreeCAD layer get them without that layer importing GUI code.  FreeCAD
@@ -54,3 +54,22 @@ class ViewProviderSetup(ViewProvider):
 
         guarded("Choose models")(open_panel)(vobj.Object.Document)
         return True
+
+
+class ViewProviderPlacedModel(ViewProvider):
+    """The workpiece model at W: drawn like the model (a Python feature without a view provider proxy
+    gets no display mode and is not drawn at all), in the workpiece region's orange."""
+
+    ICON = "WorkCal_Calibration"
+    COLOR = (1.0, 0.6, 0.2)
+    DEFAULT_MODES = ("Shaded", "Flat Lines", "Points")  # mesh, shape, point cloud: the first one offered
+
+    def __init__(self, vobj):
+        super().__init__(vobj)
+        for name in ("ShapeColor", "PointColor"):
+            if hasattr(vobj, name):
+                setattr(vobj, name, self.COLOR)
+
+    def getDefaultDisplayMode(self):
+        modes = self.ViewObject.listDisplayModes() if hasattr(self, "ViewObject") else []
+        return next((m for m in self.DEFAULT_MODES if m in modes), modes[0] if modes else "Shaded")

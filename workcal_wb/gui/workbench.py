@@ -11,6 +11,7 @@ QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 fc_init.VIEW_PROVIDERS.update({
     "Scan": "workcal_wb.gui.view_providers:ViewProviderScan",
     "Setup": "workcal_wb.gui.view_providers:ViewProviderSetup",
+    "PlacedModel": "workcal_wb.gui.view_providers:ViewProviderPlacedModel",
 })
 
 

@@ -15,6 +15,7 @@ from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.units import MM_PER_UNIT
 from workcal_wb.fc.undo import transaction
 from workcal_wb.gui.task_panels.common import Command, message, warning
+from workcal_wb.gui.view import look
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -103,7 +104,7 @@ def _show(doc, objects) -> None:
     for obj in objects:
         FreeCADGui.Selection.addSelection(obj)
     if view is not None and hasattr(view, "fitAll"):
-        view.fitAll()
+        look(view)
 
 
 class ImportScanCommand(Command):

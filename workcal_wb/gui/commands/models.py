@@ -84,10 +84,10 @@ def model_candidates(doc) -> list:
             continue
         if obj.TypeId.startswith("Path::") or obj.TypeId.startswith("Sketcher::"):
             continue
-        kind = fc_models._kind(obj)[0]
+        kind = fc_models.kind_of(obj)[0]
         if kind is None:
             continue
-        if kind == "shape" and not fc_models._kind(obj)[1].Faces:
+        if kind == "shape" and not fc_models.kind_of(obj)[1].Faces:
             continue
         out.append(obj)
     return out
@@ -186,9 +186,9 @@ class ChooseModelsPanel:
             show_error(translate("WorkCal", "Model file"), str(exc))
 
     def getStandardButtons(self):
-        from workcal_wb.gui.task_panels import QtWidgets
+        from workcal_wb.gui.task_panels import OK_CANCEL
 
-        return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+        return OK_CANCEL
 
     def accept(self):
         """Store the choice; on a refused object show why and keep the panel open (returns False)."""

@@ -19,7 +19,7 @@ from workcal_wb.core.match import METHODS
 from workcal_wb.fc import prefs
 from workcal_wb.fc import calibration_object as co
 
-from . import QtCore, QtWidgets
+from . import OK_CANCEL, QtCore, QtWidgets
 from .common import error, message, warning
 
 translate = FreeCAD.Qt.translate
@@ -305,7 +305,7 @@ class CalibratePanel:
 
     # ------------------------------------------------------------------ task dialog protocol
     def getStandardButtons(self):
-        return int(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+        return OK_CANCEL
 
     def accept(self):
         """OK: start the calibration (the dialog stays open until it finishes)."""
@@ -402,11 +402,9 @@ class CalibratePanel:
             return
         try:
             if self.calibration is not None and self.doc.getObject(self.calibration.Name) is not None:
-                co.update_calibration(self.calibration, result, self.inputs, self.regions_mode())
+                co.update_calibration(self.calibration, result, self.inputs, self.regions_mode(),
+                                      placed_model=self.placed_box.isChecked())
                 self.created = self.calibration
-                if self.placed_box.isChecked() and result.W is not None:
-                    co.show_placed_model(self.calibration)
-                    self.doc.recompute()
             else:
                 self.created = co.make_calibration(
                     self.doc, self._chosen("scan"), self._chosen("workpiece"), self._chosen("reference"),

@@ -16,7 +16,7 @@ import FreeCAD
 import workcal_wb
 from workcal_wb.core.errors import Cancelled, WorkCalError
 
-from . import QtWidgets
+from . import QtWidgets, run_modal
 
 translate = FreeCAD.Qt.translate
 
@@ -155,7 +155,7 @@ def confirm_force(reason: str) -> bool:
                    "running the program."))
     box.setStandardButtons(QtWidgets.QMessageBox.Yes | QtWidgets.QMessageBox.No)
     box.setDefaultButton(QtWidgets.QMessageBox.No)
-    return box.exec_() == QtWidgets.QMessageBox.Yes
+    return run_modal(box) == QtWidgets.QMessageBox.Yes
 
 
 def with_force(action, confirm=None):
