@@ -152,20 +152,22 @@ def check_sanity(T: np.ndarray, source: str) -> None:
 def check_vertical(toolpath: Toolpath, T: np.ndarray, tolerance_deg: float) -> float:
     """For a 3-axis machine: the largest tilt (deg) of the tool axis from the machine's Z; refuses past
     ``tolerance_deg`` with what to do."""
-    own = orientation.tilt_deg(toolpath.axes()) if toolpath.tool_axis is not None else np.zeros(1)
-    if own.max() > 1e-6:
-        i = int(np.argmax(own))
-        raise ExportRefused(f"{toolpath.source}: {toolpath.where(i)} tilts the tool {own[i]:.3f} deg from the "
-                            "workpiece's Z: a 3-axis machine cannot follow a 5-axis toolpath; export for a 5-axis "
-                            "machine (--machine 5axis-tcp)")
-    tilt = float(orientation.tilt_deg(T[:3, :3] @ orientation.VERTICAL)[0])
-    if tilt > tolerance_deg:
-        raise ExportRefused(
-            f"{toolpath.source}: W tilts the tool axis {tilt:.4f} deg from the machine's Z, more than the 3-axis "
-            f"tolerance {tolerance_deg:g} deg, so a 3-axis machine cannot hold the tool as the toolpath means. "
-            "Level the part on the table (shim it) and calibrate again, accept the tilt for your tool with "
-            f"--vertical-tol {math.ceil(tilt * 100) / 100:g} or more, or export for a 5-axis machine "
-            "(--machine 5axis-tcp); nothing was written")
+    axes = orientation.VERTICAL[None] if toolpath.tool_axis is None else toolpath.tool_axis
+    tilts = orientation.tilt_deg(axes @ T[:3, :3].T)
+    i = int(np.argmax(tilts))
+    tilt = float(tilts[i])
+    if tilt <= tolerance_deg:
+        return tilt
+    if len(np.unique(np.round(axes, 9), axis=0)) > 1:
+        raise ExportRefused(f"{toolpath.source}: {toolpath.where(i)} tilts the tool {tilt:.3f} deg from the machine's "
+                            "Z: a 3-axis machine cannot follow this 5-axis toolpath; export for a 5-axis machine "
+                            "(--machine 5axis-tcp); nothing was written")
+    raise ExportRefused(
+        f"{toolpath.source}: W tilts the tool axis {tilt:.4f} deg from the machine's Z, more than the 3-axis "
+        f"tolerance {tolerance_deg:g} deg, so a 3-axis machine cannot hold the tool as the toolpath means. "
+        "Level the part on the table (shim it) and calibrate again, accept the tilt for your tool with "
+        f"--vertical-tol {math.ceil(tilt * 100) / 100:g} or more, or export for a 5-axis machine "
+        "(--machine 5axis-tcp); nothing was written")
     return tilt
 
 

@@ -89,13 +89,21 @@ def _first_offset(job: common.ExportJob) -> list[str]:
 def render(job: common.ExportJob) -> list:
     path = transformed(job.toolpath, job.transform, job.chord_tol_mm)
     header = [comment(h) for h in common.wrapped(common.header_lines(job, NAME, _notes(job)), COMMENT_WIDTH)]
-    return [(job.out, _chunks(job, path, header))]
+    return [(job.out, _chunks(path, header, job.machine, job.options.rotary, _first_offset(job)))]
 
 
-def _chunks(job: common.ExportJob, path, header: list[str]):
-    five_axis = job.machine == "5axis-tcp"
-    rotary = orientation.ROTARY[job.options.rotary].letters
-    angles = orientation.rotary_from_tool_axes(job.options.rotary, path.axes()) if five_axis else None
+def format_gcode(toolpath, header=()) -> str:
+    """G-code of a toolpath in its own frame, with no calibration (the simulator's sample, test files):
+    3-axis when every tool axis is +Z, 5-axis A/B otherwise."""
+    vertical = toolpath.tool_axis is None or np.allclose(toolpath.tool_axis, orientation.VERTICAL, atol=1e-12)
+    lines = [comment(h) for h in list(header) + toolpath.header]
+    return "".join(_chunks(toolpath, lines, "3axis" if vertical else "5axis-tcp", "ab", []))
+
+
+def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offset: list[str]):
+    five_axis = machine == "5axis-tcp"
+    rotary = orientation.ROTARY[rotary_name].letters
+    angles = orientation.rotary_from_tool_axes(rotary_name, path.axes()) if five_axis else None
     events = common.events_by_move(path.events, len(path))
     arc_rows = np.cumsum(path.arc_mask) - 1
     starts = path.starts()
@@ -108,11 +116,9 @@ def _chunks(job: common.ExportJob, path, header: list[str]):
         rot = None if angles is None else np.array(numbers(angles[a:b], 4)).reshape(-1, 2)
         for i in range(a, b):
             for e in events.get(i, ()):
-                lines += _event_blocks(e, job.machine)
+                lines += _event_blocks(e, machine)
             if i == 0:
-                lines += _first_offset(job)
-            if i in path.comments:
-                lines += [comment(c) for c in path.comments[i].split("\n")]
+                lines += first_offset
             k, row = int(path.kind[i]), xyz[i - a]
             known = path.partial.get(i, AXES) if not five_axis else AXES
             words = [f"{axis}{row[j]}" for j, axis in enumerate(AXES) if axis in known]
@@ -133,10 +139,11 @@ def _chunks(job: common.ExportJob, path, header: list[str]):
             if not np.isnan(feeds[i - a]) and feeds[i - a] != feed:
                 feed = feeds[i - a]
                 words.append(f"F{numbers([feed], 2)[0]}")
-            lines.append(code + " " + " ".join(words))
+            notes = [comment(c) for c in path.comments.get(i, "").split("\n") if c]  # on the line: they stay its own
+            lines.append(" ".join([code, *words, *notes]))
         yield "\n".join(lines) + "\n"
         lines = []
     for e in events.get(len(path), ()):
-        lines += _event_blocks(e, job.machine)
+        lines += _event_blocks(e, machine)
     lines += [comment(f) for f in path.footer] + ["G49", "M30", "%"]
     yield "\n".join(lines) + "\n"
