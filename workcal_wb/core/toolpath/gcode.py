@@ -462,6 +462,9 @@ def _arc_centre(words: dict, state: _State, start: np.ndarray, end: np.ndarray, 
     normal_axis, offset_letters = PLANES[state.plane]
     normal = np.zeros(3)
     normal[normal_axis] = 1.0
+    for letter in "IJK":  # an off-plane offset of zero says nothing (FreeCAD's posts write K0 in G17 arcs)
+        if letter not in offset_letters and words.get(letter) == 0:
+            del words[letter]
     offsets = [a for a in "IJK" if a in words]
     wrong = [a for a in offsets if a not in offset_letters]
     if wrong:

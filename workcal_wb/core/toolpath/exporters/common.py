@@ -264,6 +264,11 @@ def part_name(name: str, index: int) -> str:
     return f"{name}_{index:03d}"
 
 
+def part_path(job: ExportJob, index: int) -> Path:
+    """Where part ``index`` of the program goes: beside it, named after its file."""
+    return job.out.with_name(f"{job.out.stem}_{index:03d}{job.out.suffix}")
+
+
 def fingerprint(job: ExportJob) -> str:
     return result_fingerprint(job.calibration)
 

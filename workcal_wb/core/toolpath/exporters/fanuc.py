@@ -118,7 +118,7 @@ def render(job: common.ExportJob):
         part_name = common.part_name(name, index)
         body, moves = _positions_of(part)
         note = remarks(f"WorkCal part {index} of {name}, result sha256 {common.fingerprint(job)}")
-        yield (job.out.with_name(part_name + EXTENSION),
+        yield (common.part_path(job, index),
                [_program(part_name, comment, note + body, positions_text(*_targets(path, tool_of, moves)))])
     calls = [f"CALL {common.part_name(name, i)} ;" for i in range(1, len(parts) + 1)]
     yield job.out, [_program(name, comment, head + calls, [])]

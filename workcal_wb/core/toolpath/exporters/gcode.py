@@ -145,5 +145,7 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offse
         lines = []
     for e in events.get(len(path), ()):
         lines += _event_blocks(e, machine)
-    lines += [comment(f) for f in path.footer] + ["G49", "M30", "%"]
+    offsets = [e for e in path.events if e.kind == LENGTH_OFFSET]
+    cancel = [] if offsets and offsets[-1].number is None else ["G49"]
+    lines += [comment(f) for f in path.footer] + cancel + ["M30", "%"]
     yield "\n".join(lines) + "\n"

@@ -110,7 +110,7 @@ def render(job: common.ExportJob):
     def part(index, body):
         part_name = common.part_name(name, index)
         note = f";WorkCal part {index} of program {name}, result sha256 {common.fingerprint(job)}"
-        return job.out.with_name(part_name + EXTENSION), [_module(part_name, [note], body)]
+        return common.part_path(job, index), [_module(part_name, [note], body)]
 
     def main(count):
         calls = [f"{common.part_name(name, i)}( )" for i in range(1, count + 1)]
