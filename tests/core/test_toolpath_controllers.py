@@ -2,6 +2,7 @@
 a corpus of CAM files in the shapes real posts write, the G-code reader's findings and the safety bounds."""
 import hashlib
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -53,7 +54,11 @@ def test_corpus_exports_pass_the_checkers_and_parse_back(name, fmt, tmp_path):
         np.testing.assert_allclose(linearised(again).points(), frames.apply(W, linearised(path).points()), atol=1e-3)
         if five_axis:
             np.testing.assert_allclose(again.axes(), path.axes() @ W[:3, :3].T, atol=1e-6)
-        assert [e.kind for e in again.events] == [e.kind for e in path.events]
+        kinds = [e.kind for e in again.events]
+        offsets = [e for e in path.events if e.kind == "length_offset"]
+        if kinds[-1:] == ["length_offset"] and again.events[-1].number is None and offsets[-1].number is not None:
+            kinds.pop()  # the export cancels tool-length compensation at the end when the CAM file did not
+        assert kinds == [e.kind for e in path.events]
         return
     poses = PARSERS[fmt](text)
     expected = frames.apply(W, linearised(path).points())
@@ -94,7 +99,7 @@ def test_urscript_has_def_first_everything_indented_and_blends(tmp_path):
     export(path, calibration(), "urscript", out)
     text = out.read_text()
     check_urscript(text)
-    radii = [float(r) for r in __import__("re").findall(r"r=([\d.]+)\)", text)]
+    radii = [float(r) for r in re.findall(r"r=([\d.]+)\)", text)]
     assert radii[-1] == 0 and max(radii) > 0
 
 
@@ -116,7 +121,7 @@ def test_fanuc_lines_remarks_attr_joint_first_and_parts(tmp_path):
         text = (tmp_path / name).read_text()
         check_fanuc(text, Path(name).stem.upper())
         targets += parse_fanuc(text)
-    assert " 1:J P[1]" in (tmp_path / files[1]).read_text()
+    assert re.search(r"^\s*\d+:J P\[1\] ", (tmp_path / files[1]).read_text(), flags=re.M)
     expected = frames.apply(TURNED, path.points())
     np.testing.assert_allclose([p[:3, 3] for p, _ in targets], expected, atol=1e-3)
     # a shorter export into the same folder removes the parts it no longer has
@@ -150,8 +155,8 @@ def test_krl_and_rapid_parts_are_called_in_order(tmp_path):
 def test_gcode_3axis_refuses_a_tilted_w_with_the_tilt_and_keeps_arcs_when_level(tmp_path):
     path = parse_gcode("G0 X10 Y0 Z5\nG1 Z0 F300\nG3 X0 Y10 I-10 J0\nG0 Z5\n", "part.nc")
     tilted = frames.rigid(frames.rot_x(0.2), (500.0, 0, 0))
-    with pytest.raises(ExportRefused, match=r"W tilts the tool axis 0\.2000 deg .* --vertical-tol .* --machine "
-                                            r"5axis-tcp"):
+    with pytest.raises(ExportRefused, match=r"W tilts the tool axis 0\.2000 deg .* --vertical-tol 0\.2 .*"
+                                            r"--machine 5axis-tcp"):
         export(path, calibration(tilted), "gcode", tmp_path / "p.nc")
     assert not (tmp_path / "p.nc").exists()
     export(path, calibration(tilted), "gcode", tmp_path / "p.nc", vertical_tol_deg=0.25)
@@ -167,7 +172,7 @@ def test_gcode_5axis_states_its_kinematics_and_tcp(tmp_path):
     out = tmp_path / "p.nc"
     export(path, calibration(TILTED), "gcode", out, machine="5axis-tcp", rotary="ac")
     text = comment_text(out.read_text()) + out.read_text()
-    assert "tool-centre-point control G43.4" in text and "Rz(C) Rx(A)" in text and "G43.4 H3" in text
+    assert "tool-centre-point control G43.4" in text and "Rz[C] Rx[A]" in text and "G43.4 H3" in text
     with pytest.raises(InputError, match="not --machine robot"):
         export(path, calibration(TILTED), "gcode", out, machine="robot")
 

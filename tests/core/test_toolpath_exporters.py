@@ -91,7 +91,7 @@ def parse_rapid(text):
     speeds = {name: float(v) * 60 for name, v in re.findall(r"CONST speeddata (\w+) := \[" + NUMBER, text)}
     return [(uframe @ pose(xyz, q), speeds[v])
             for xyz, q, v in re.findall(r"Move[JL] \[" + xyz_q + r",\[0,0,0,0\],\[[^\]]*\]\], (\w+), \w+, "
-                                        r"tWorkCal1\\WObj:=wobjWorkCal;", text)]
+                                        r"tWorkCal\d+\\WObj:=wobjWorkCal;", text)]
 
 
 def parse_urscript(text):
