@@ -64,6 +64,9 @@ _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 _WORD = re.compile(r"([A-Z])\s*(" + _NUMBER + ")")
 _BLOCK = re.compile(r"(?:\s*[A-Z]\s*" + _NUMBER + r")*\s*")
 _CHECKSUM = re.compile(r"^(.*)\*\s*(\d+)\s*$")
+# The block almost every line of a long file is: [N..] [G0/G1] [X..] [Y..] [Z..] [F..], read without the general path.
+_FAST = re.compile(r"(?:N\d+\s*)?(?:G0*([01])(?![0-9.])\s*)?(?:X(" + _NUMBER + r")\s*)?(?:Y(" + _NUMBER
+                   + r")\s*)?(?:Z(" + _NUMBER + r")\s*)?(?:F(" + _NUMBER + r")\s*)?")
 
 
 @dataclass
@@ -170,8 +173,11 @@ def _read(lines, source: str, units: str, rotary: str, block_delete, dwell_p: st
             text = text[1:].lstrip()
         if "*" in text:
             text = _checked(text, source, number)
+        upper = text.upper()
+        if not pending and _fast_move(upper, state, number):
+            continue
         before = state.count
-        end_code = _block(text.upper(), state, source, number)
+        end_code = _block(upper, state, source, number)
         if state.count > before:
             if before == 0:  # comments before the first move are the file's header
                 header, pending = header[:len(header) - len(comments)], comments
@@ -181,6 +187,37 @@ def _read(lines, source: str, units: str, rotary: str, block_delete, dwell_p: st
         if end_code:
             ended = f"{end_code} (line {number})"
     return _finish(state, source, header, pending)
+
+
+def _fast_move(text: str, state: _State, number: int) -> bool:
+    """Read a plain straight move in absolute mode with every axis known; False leaves it to ``_block``."""
+    m = _FAST.fullmatch(text)
+    if m is None or not state.absolute or not state.count or math.isnan(sum(state.position)):
+        return False
+    code, x, y, z, f = m.groups()
+    motion = MOTION[int(code)] if code else state.motion
+    if motion not in (RAPID, LINEAR) or (x is None and y is None and z is None):
+        return False
+    unit = state.mm_per_unit
+    if f is not None:
+        state.feed = float(f) * unit
+    if motion == LINEAR and not state.feed > 0:
+        return False
+    state.motion = motion
+    position = state.position
+    if x is not None:
+        position[0] = float(x) * unit
+    if y is not None:
+        position[1] = float(y) * unit
+    if z is not None:
+        position[2] = float(z) * unit
+    state.kind.append(CODE[motion])
+    state.end.extend(position)
+    state.feeds.append(math.nan if motion == RAPID else state.feed)
+    state.lines.append(number)
+    if state.tilted:
+        state.axes.extend(state.axis)
+    return True
 
 
 def _split_comments(text: str, source: str, number: int) -> tuple[list[str], str]:

@@ -100,25 +100,47 @@ def format_gcode(toolpath, header=()) -> str:
     return "".join(_chunks(toolpath, lines, "3axis" if vertical else "5axis-tcp", "ab", []))
 
 
+def _feed_words(feed: np.ndarray) -> np.ndarray:
+    """" F..." where a move's feed differs from the last one written, "" elsewhere (rapids write none)."""
+    known = ~np.isnan(feed)
+    index = np.where(known, np.arange(len(feed)), -1)
+    last = np.maximum.accumulate(np.concatenate([[-1], index[:-1]]))
+    previous = np.where(last >= 0, feed[np.maximum(last, 0)], np.nan)
+    write = known & ~(feed == previous)
+    words = np.full(len(feed), "", dtype=object)
+    words[write] = [f" F{v}" for v in numbers(feed[write], 2)]
+    return words
+
+
 def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offset: list[str]):
+    """The program text, CHUNK_MOVES moves at a time: plain moves formatted in bulk, the others
+    (arcs, events, comments, partial moves) one by one."""
     five_axis = machine == "5axis-tcp"
     rotary = orientation.ROTARY[rotary_name].letters
     angles = orientation.rotary_from_tool_axes(rotary_name, path.axes()) if five_axis else None
     events = common.events_by_move(path.events, len(path))
+    special = path.arc_mask.copy()
+    special[[i for i in set(events) | set(path.comments) | set(path.partial) if i < len(path)]] = True
+    special[:1] = True
     arc_rows = np.cumsum(path.arc_mask) - 1
     starts = path.starts()
+    feed_words = _feed_words(path.feed)
+    codes = np.array([MOTION_CODE[k] for k in KINDS], dtype=object)[path.kind]
     yield "%\n" + "\n".join(header) + "\n" + SAFE_START + "\n"
-    plane, feed, lines = 17, None, []
+    plane = 17
     for a in range(0, len(path), CHUNK_MOVES):
         b = min(a + CHUNK_MOVES, len(path))
-        xyz = np.array(numbers(path.end[a:b], 4)).reshape(-1, 3)
-        feeds = path.feed[a:b]
-        rot = None if angles is None else np.array(numbers(angles[a:b], 4)).reshape(-1, 2)
-        for i in range(a, b):
+        xyz = np.array(numbers(path.end[a:b], 4), dtype=object).reshape(-1, 3)
+        rot = None if angles is None else np.array(numbers(angles[a:b], 4), dtype=object).reshape(-1, 2)
+        tail = ([f" {rotary[0]}{u} {rotary[1]}{v}" for u, v in rot] if rot is not None else [""] * (b - a))
+        lines = [f"{c} X{x} Y{y} Z{z}{t}{f}" for c, (x, y, z), t, f in
+                 zip(codes[a:b], xyz, tail, feed_words[a:b])]
+        for i in np.flatnonzero(special[a:b]) + a:
+            block = []
             for e in events.get(i, ()):
-                lines += _event_blocks(e, machine)
+                block += _event_blocks(e, machine)
             if i == 0:
-                lines += first_offset
+                block += first_offset
             k, row = int(path.kind[i]), xyz[i - a]
             known = path.partial.get(i, AXES) if not five_axis else AXES
             words = [f"{axis}{row[j]}" for j, axis in enumerate(AXES) if axis in known]
@@ -131,18 +153,14 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offse
                     code = MOTION_CODE[ARC_CW if KINDS[k] == ARC_CCW else ARC_CCW]
                 if PLANE_OF_AXIS[axis] != plane:
                     plane = PLANE_OF_AXIS[axis]
-                    lines.append(f"G{plane}")
+                    block.append(f"G{plane}")
                 offset = numbers(centre - starts[i], 4)
                 words += [f"{letter}{offset[OFFSET_AXIS[letter]]}" for letter in PLANES[plane][1]]
-            if rot is not None:
-                words += [f"{rotary[0]}{rot[i - a, 0]}", f"{rotary[1]}{rot[i - a, 1]}"]
-            if not np.isnan(feeds[i - a]) and feeds[i - a] != feed:
-                feed = feeds[i - a]
-                words.append(f"F{numbers([feed], 2)[0]}")
             notes = [comment(c) for c in path.comments.get(i, "").split("\n") if c]  # on the line: they stay its own
-            lines.append(" ".join([code, *words, *notes]))
+            block.append(" ".join([code, *words]) + tail[i - a] + feed_words[i] + "".join(" " + n for n in notes))
+            lines[i - a] = "\n".join(block)
         yield "\n".join(lines) + "\n"
-        lines = []
+    lines = []
     for e in events.get(len(path), ()):
         lines += _event_blocks(e, machine)
     offsets = [e for e in path.events if e.kind == LENGTH_OFFSET]
