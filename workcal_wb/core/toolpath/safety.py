@@ -7,7 +7,7 @@ export leaves no file behind and an older file untouched.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -92,7 +92,6 @@ class ExportOptions:
     rapid_feed_mm_min: float = 6000.0
     max_lines: int | None = None  # lines per program part; None: the language's own limit
     calibration_source: str = "calibration"
-    extras: dict = field(default_factory=dict)
 
     def check(self) -> None:
         if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm > 0):

@@ -203,6 +203,42 @@ def events_by_move(events: list, count: int) -> dict:
     return out
 
 
+def tools_by_move(path: RobotPath, first: int) -> list[int]:
+    """The CAM tool in use at each target (changed by the tool-change events before it)."""
+    changes = {e.before: int(e.number) for e in path.events if e.kind == TOOL_CHANGE}
+    tools, tool = [], first
+    for i in range(len(path)):
+        tool = changes.get(i, tool)
+        tools.append(tool)
+    return tools
+
+
+def first_tool(path: RobotPath) -> int:
+    """The tool of the first move: the one changed to before it, else 1."""
+    return next((int(e.number) for e in path.events if e.kind == TOOL_CHANGE and e.before == 0), 1)
+
+
+def move_groups(path: RobotPath, event_lines, comment_line, move_line):
+    """Line groups in order, one per target (its events, its comments, then ``move_line(i, stops)``,
+    where ``stops(i)`` says whether the robot must stop at target i) and one for the events after the
+    last target: the body every robot language packs into program parts."""
+    events = events_by_move(path.events, len(path))
+
+    def stops(i: int) -> bool:
+        return i + 1 == len(path) or i + 1 in events
+
+    for i in range(len(path)):
+        lines = []
+        for e in events.get(i, ()):
+            lines += event_lines(e)
+        lines += [comment_line(c) for c in path.comments.get(i, "").split("\n") if c]
+        yield lines + move_line(i, stops)
+    tail = []
+    for e in events.get(len(path), ()):
+        tail += event_lines(e)
+    yield tail
+
+
 @dataclass
 class Action:
     """What a robot program does for one G-code event: a message, and whether the robot must stop."""

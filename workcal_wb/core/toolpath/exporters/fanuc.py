@@ -72,8 +72,7 @@ def render(job: common.ExportJob):
     """The main program (and its parts, when over the line limit)."""
     name = common.program_name(job, MAX_NAME, must_match_file=True).upper()
     path = common.robot_path(job, in_base_frame=True, max_speed_mm_s=MAX_SPEED_MM_S)
-    events = common.events_by_move(path.events, len(path))
-    first_tool = next((int(e.number) for e in path.events if e.kind == "tool_change" and e.before == 0), 1)
+    first_tool = common.first_tool(path)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {first_tool})
     notes = ["units: mm, speeds in cm/min (whole numbers: the controller's resolution)",
              "angles: W, P, R in degrees, fixed axes X then Y then Z (R = Rz(R) Ry(P) Rx(W))",
@@ -87,29 +86,18 @@ def render(job: common.ExportJob):
     for h in common.header_lines(job, NAME, notes):
         head += remarks(h)
     head += ["UFRAME_NUM=0 ;", f"UTOOL_NUM={first_tool} ;"]
-    tool_of = []
-    tool = first_tool
-    groups = []
-    for i in range(len(path)):
-        lines = []
-        for e in events.get(i, ()):
-            lines += _event_lines(e)
-            tool = int(e.number) if e.kind == "tool_change" else tool
-        for c in path.comments.get(i, "").split("\n"):
-            lines += remarks(c) if c else []
-        tool_of.append(tool)
-        stop = i + 1 == len(path) or i + 1 in events
+    tool_of = common.tools_by_move(path, first_tool)
+
+    def move(i, stops):
+        if i == 0:
+            return [(i, ("J", f"P[{{}}] {JOINT_SPEED} FINE ;"))]
         speed = max(1, round(path.feed[i] / 10.0))
-        motion = ("J", f"P[{{}}] {JOINT_SPEED} FINE ;") if i == 0 else (
-            "L", f"P[{{}}] {speed}cm/min {'FINE' if stop else 'CNT0'} ;")
-        groups.append((i, lines + [motion]))
-    tail = []
-    for e in events.get(len(path), ()):
-        tail += _event_lines(e)
-    groups.append((len(path), tail))
+        return [(i, ("L", f"P[{{}}] {speed}cm/min {'FINE' if stops(i) else 'CNT0'} ;"))]
+
+    groups = common.move_groups(path, _event_lines, lambda c: "\n".join(remarks(c)), move)
     limit = (job.options.max_lines or MAX_LINES) - 5
     comment = "FORCED" if job.forced else "WorkCal"
-    parts = list(common.packed(_numbered(groups), limit))
+    parts = list(common.packed(_split_remarks(groups), limit))
     if len(parts) == 1 and len(head) + len(parts[0]) <= (job.options.max_lines or MAX_LINES):
         yield job.out, [_program(name, comment, head + _positions_of(parts[0])[0],
                                  positions_text(*_targets(path, tool_of, _positions_of(parts[0])[1])))]
@@ -124,10 +112,10 @@ def render(job: common.ExportJob):
     yield job.out, [_program(name, comment, head + calls, [])]
 
 
-def _numbered(groups):
-    """Line groups with the move index on motion lines, for packing."""
-    for i, lines in groups:
-        yield [(i, item) if isinstance(item, tuple) else item for item in lines]
+def _split_remarks(groups):
+    """Line groups with each remark of a comment on its own /MN line."""
+    for lines in groups:
+        yield [piece for item in lines for piece in (item.split("\n") if isinstance(item, str) else [item])]
 
 
 def _positions_of(part: list) -> tuple[list, list]:

@@ -53,30 +53,21 @@ def _event_lines(event) -> list[str]:
     return lines
 
 
-def _moves(job, path):
-    """The body, move by move: (lines of move i)."""
+def _moves(path):
+    """The body, one group of lines per target."""
     targets = frames_text(path.rotation, path.position)
-    events = common.events_by_move(path.events, len(path))
-    speed = None
-    for i, target in enumerate(targets):
-        lines = []
-        for e in events.get(i, ()):
-            lines += _event_lines(e)
-        lines += [f";{c}" for c in path.comments.get(i, "").split("\n") if c]
+    speed = [None]
+
+    def move(i, stops):
         if i == 0:
-            lines.append(f"PTP {target}")
-            yield lines
-            continue
-        if path.feed[i] != speed:
-            speed = path.feed[i]
-            lines.append(f"$VEL.CP = {numbers([speed / 60000.0], 6)[0]}")
-        approximate = i + 1 < len(path) and i + 1 not in events
-        lines.append(f"LIN {target}" + (" C_DIS" if approximate else ""))
-        yield lines
-    tail = []
-    for e in events.get(len(path), ()):
-        tail += _event_lines(e)
-    yield tail
+            return [f"PTP {targets[0]}"]
+        lines = []
+        if path.feed[i] != speed[0]:
+            speed[0] = path.feed[i]
+            lines.append(f"$VEL.CP = {numbers([speed[0] / 60000.0], 6)[0]}")
+        return lines + [f"LIN {targets[i]}" + ("" if stops(i) else " C_DIS")]
+
+    return common.move_groups(path, _event_lines, lambda c: f";{c}", move)
 
 
 def _module(name: str, head: list[str], body: list[str]) -> str:
@@ -89,7 +80,7 @@ def render(job: common.ExportJob):
     base_mode = job.options.krl_mode == "base"
     path = common.robot_path(job, in_base_frame=not base_mode, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"}) or [1]
-    first_tool = next((int(e.number) for e in path.events if e.kind == "tool_change" and e.before == 0), 1)
+    first_tool = common.first_tool(path)
     where = (f"positions: workpiece frame X, relative to $BASE = $ROBROOT:{common.placement_name(job)}" if base_mode
              else "positions: robot base frame B ($BASE = $ROBROOT)")
     notes = ["units: mm, $VEL.CP in m/s, $APO.CDIS in mm",
@@ -116,5 +107,5 @@ def render(job: common.ExportJob):
         calls = [f"{common.part_name(name, i)}( )" for i in range(1, count + 1)]
         return _module(name, head, setup + calls + ["PTP XHOME"])
 
-    yield from common.program_files(job, _moves(job, path), limit, lambda body: _module(
+    yield from common.program_files(job, _moves(path), limit, lambda body: _module(
         name, head, setup + body + ["PTP XHOME"]), part, main)

@@ -40,25 +40,16 @@ def _string(text: str) -> str:
 
 
 def _moves(path, speed_names: dict, first_tool: int):
+    """The body, one group of lines per target."""
     targets = poses_text(path.rotation, path.position)
-    events = common.events_by_move(path.events, len(path))
-    tool = first_tool
-    for i, target in enumerate(targets):
-        lines = []
-        for e in events.get(i, ()):
-            lines += _event_lines(e)
-            if e.kind == "tool_change":
-                tool = int(e.number)
-        lines += [f"    ! {c}" for c in path.comments.get(i, "").split("\n") if c]
-        last = i + 1 == len(path) or i + 1 in events
-        move = "MoveJ" if i == 0 else "MoveL"
-        lines.append(f"    {move} [{target[1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
-                     f"{'fine' if last or i == 0 else ZONE}, {tool_name(tool)}\\WObj:={WOBJ};")
-        yield lines
-    tail = []
-    for e in events.get(len(path), ()):
-        tail += _event_lines(e)
-    yield tail
+    tools = common.tools_by_move(path, first_tool)
+
+    def move(i, stops):
+        kind, zone = ("MoveJ", "fine") if i == 0 else ("MoveL", "fine" if stops(i) else ZONE)
+        return [f"    {kind} [{targets[i][1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
+                f"{zone}, {tool_name(tools[i])}\\WObj:={WOBJ};"]
+
+    return common.move_groups(path, _event_lines, lambda c: f"    ! {c}", move)
 
 
 def _event_lines(event) -> list[str]:
@@ -80,7 +71,7 @@ def render(job: common.ExportJob):
     name = common.program_name(job, MAX_NAME, reserved=RESERVED)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
-    first_tool = next((int(e.number) for e in path.events if e.kind == "tool_change" and e.before == 0), 1)
+    first_tool = common.first_tool(path)
     speed_names = {f: f"vWorkCal{i}" for i, f in enumerate(dict.fromkeys(path.feed.tolist()), start=1)}
     notes = ["units: mm, speeds (speeddata v_tcp) in mm/s",
              "angles: orientation quaternions q1..q4 = w, x, y, z (ABB order, unit length)",

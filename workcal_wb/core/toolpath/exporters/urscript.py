@@ -67,7 +67,7 @@ def render(job: common.ExportJob):
     name = common.program_name(job, MAX_NAME)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
-    first_tool = next((int(e.number) for e in path.events if e.kind == "tool_change" and e.before == 0), 1)
+    first_tool = common.first_tool(path)
     events = common.events_by_move(path.events, len(path))
     notes = ["units: METRES and RADIANS (URScript), speeds v in m/s, acceleration a in m/s^2",
              "angles: rotation vector rx, ry, rz (axis times angle, radians)",
@@ -90,15 +90,12 @@ def render(job: common.ExportJob):
     targets = poses_text(path.rotation, path.position)
     radii = numbers(blend_radii_m(path.position, [i - 1 for i in events if 0 < i <= len(path)] + [len(path) - 1]), 5)
     speeds = numbers(path.feed / 60000.0, 6)
-    for i, target in enumerate(targets):
-        for e in events.get(i, ()):
-            lines += _event_lines(e)
-        lines += [f"  # {c}" for c in path.comments.get(i, "").split("\n") if c]
+
+    def move(i, stops):
         if i == 0:
-            lines.append(f"  movej(pose_trans(workcal_base, {target}), a={JOINT_ACCELERATION}, v={JOINT_SPEED})")
-        else:
-            lines.append(f"  movel(pose_trans(workcal_base, {target}), a={ACCELERATION_M_S2}, v={speeds[i]}, "
-                         f"r={radii[i]})")
-    for e in events.get(len(path), ()):
-        lines += _event_lines(e)
+            return [f"  movej(pose_trans(workcal_base, {targets[0]}), a={JOINT_ACCELERATION}, v={JOINT_SPEED})"]
+        return [f"  movel(pose_trans(workcal_base, {targets[i]}), a={ACCELERATION_M_S2}, v={speeds[i]}, r={radii[i]})"]
+
+    for group in common.move_groups(path, _event_lines, lambda c: f"  # {c}", move):
+        lines += group
     return [(job.out, ["\n".join(lines + ["end"]) + "\n"])]
