@@ -1,4 +1,5 @@
 """`python3 -m workcal_wb calibrate` and `demo` from files, as a user runs them."""
+import hashlib
 import json
 
 import numpy as np
@@ -25,7 +26,7 @@ def _args(folder, out, *extra):
 
 def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path, capsys):
     folder, W_true = scene_files
-    assert main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"))) == 0
+    assert main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"), "--machine", "5axis-tcp")) == 0
     result = json.loads((tmp_path / "result.json").read_text())
     W = np.array(result["W"])
     assert result["status"] == "ok" and W.shape == (4, 4)
@@ -35,6 +36,11 @@ def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path
     original = read_gcode(folder / "toolpath.nc").points()
     calibrated = read_gcode(tmp_path / "toolpath_calibrated.nc").points()
     assert np.abs(calibrated - frames.apply(W, original)).max() < 1e-3  # written to 4 decimals
+    # the program names its result and shows the bound result.json holds (issue 14.3)
+    program = (tmp_path / "toolpath_calibrated.nc").read_text()
+    digest = hashlib.sha256((tmp_path / "result.json").read_bytes()).hexdigest()[:16]
+    assert f"result sha256 {digest}" in program
+    assert f"bound {result['uncertainty']['toolpath_bound_mm']} mm" in program
     assert "calibration OK" in capsys.readouterr().out
 
 

@@ -36,12 +36,13 @@ def test_ok_export_exit_0(files, capsys):
     out = files / "prog.src"
     assert run(files, "--calibration", str(files / "ok.json"), "--format", "krl", "--out", str(out)) == 0
     assert out.exists() and "LIN {" in out.read_text()
-    assert capsys.readouterr().out.startswith(f"wrote {out}: KUKA KRL, 4 moves")
+    assert capsys.readouterr().out.startswith(f"wrote {out}: KUKA KRL for robot, 4 moves")
 
 
 def test_format_from_extension(files):
     for ext in (".mod", ".script", ".ls", ".csv", ".nc"):
-        assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / f"prog{ext}")) == 0
+        assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / f"prog{ext}"),
+                   *(["--machine", "5axis-tcp"] if ext == ".nc" else [])) == 0
 
 
 def test_failed_calibration_exit_1_says_which_gate_and_how_to_force(files, capsys):
@@ -57,7 +58,7 @@ def test_forced_export_exit_0_with_warning_and_banner(files, capsys):
     out = files / "prog.script"
     assert run(files, "--calibration", str(files / "failed.json"), "--out", str(out), "--force") == 0
     assert "FORCED" in capsys.readouterr().err
-    assert out.read_text().startswith("# FORCED EXPORT")
+    assert out.read_text().startswith("def prog():\n  # FORCED EXPORT")
 
 
 def test_envelope_violation_exit_1(files, capsys):
@@ -114,5 +115,5 @@ def test_krl_mode_and_chord_tolerance(files):
     common = ["--calibration", str(files / "ok.json"), "--krl-mode", "transformed"]
     assert run(files, *common, "--out", str(coarse), "--chord-tol", "0.5") == 0
     assert run(files, *common, "--out", str(fine), "--chord-tol", "0.001") == 0
-    assert "$BASE = $NULLFRAME" in fine.read_text()
+    assert "$BASE = $ROBROOT\n" in fine.read_text()
     assert fine.read_text().count("LIN {") > 3 * coarse.read_text().count("LIN {")

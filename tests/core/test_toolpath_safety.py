@@ -1,6 +1,7 @@
 """Refusals: failed calibrations, NaN, the work envelope; atomic writing; the FORCED banner."""
 import math
 import os
+import re
 
 import numpy as np
 import pytest
@@ -53,9 +54,11 @@ def test_a_forced_export_says_so_before_any_motion(fmt, path, tmp_path):
     assert job.forced
     lines = out.read_text().splitlines()
     first_banner = next(i for i, line in enumerate(lines) if "FORCED EXPORT" in line)
-    assert first_banner <= {"rapid": 1, "fanuc": 12}.get(fmt, 0)  # RAPID: after MODULE; Fanuc: first /MN line
-    assert "gate rms_mm = 0.8 mm, limit 0.3" in lines[first_banner + 1]
-    assert "Do not run" in lines[first_banner + 2]
+    # before any header line: after % (G-code), &ACCESS/DEF/EXT (KRL), MODULE (RAPID), def (URScript), /MN (Fanuc)
+    assert first_banner <= {"rapid": 1, "fanuc": 21, "krl": 4, "gcode": 1, "urscript": 1}.get(fmt, 0)
+    banner = " ".join(re.sub(r"^\s*(?:\d+:\s*!|[;#!(])\s*|\s*[;)]$", "", line)
+                      for line in lines[first_banner:first_banner + 12])
+    assert "gate rms_mm = 0.8 mm, limit 0.3" in banner and "Do not run" in banner
     if fmt == "fanuc":
         assert 'COMMENT\t\t= "FORCED";' in lines
 
@@ -94,7 +97,7 @@ def test_nan_is_refused(field, message, tmp_path):
     moves = [Move("rapid", [0, 0, 10]), Move("linear", [0, 0, 0], feed=100.0, line=7)]
     setattr(moves[1], field, np.array([0, math.nan, 0]) if field == "end" else math.nan)
     with pytest.raises(ExportRefused, match=f"move 2 \\(line 7\\) has a {message}"):
-        export(Toolpath(moves, source="bad"), calibration(), "urscript", tmp_path / "p.script")
+        export(Toolpath.from_moves(moves, source="bad"), calibration(), "urscript", tmp_path / "p.script")
     assert files(tmp_path) == []
 
 
@@ -122,9 +125,9 @@ def test_empty_toolpath_and_bad_tolerance_are_input_errors(path, tmp_path):
 
 def test_non_finite_quality_numbers_are_written_as_n_a(path, tmp_path):
     gates = [{"name": "rms_mm", "value": math.nan, "limit": 0.3, "passed": True, "unit": "mm"}]
-    uncertainty = {"toolpath_displacement_mm": {"p95": math.nan}}
+    uncertainty = {"toolpath_bound_mm": math.nan}
     result = CalibrationResult("ok", W, quality_gates=gates, uncertainty=uncertainty)
     out = tmp_path / "p.csv"
     export(path, result, "csv", out)
     text = out.read_text().lower()
-    assert "gate rms_mm = n/a mm, limit 0.3: passed" in text and "p95 n/a mm" in text and "nan" not in text
+    assert "gate rms_mm = n/a mm, limit 0.3: passed" in text and "bound n/a mm" in text and "nan" not in text

@@ -14,6 +14,7 @@ from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.result import OK
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
+from workcal_wb.cli.toolpath import add_machine_options, read_options
 
 UNITS = ("mm", "m", "in")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
@@ -49,6 +50,7 @@ def add_parser(subparsers):
                        help=f"{role} region as a box in scanner coordinates, mm")
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
+    add_machine_options(p)
     return p
 
 
@@ -96,7 +98,7 @@ def run(args) -> int:
     model_units = args.model_units or args.units
     workpiece = read_model(args.workpiece, model_units)
     reference = read_model(args.reference, model_units)
-    toolpath = read_gcode(args.toolpath) if args.toolpath else None
+    toolpath = read_gcode(args.toolpath, **read_options(args)) if args.toolpath else None
     merged = merge_scans(scans)
     options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)
     result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
@@ -114,7 +116,8 @@ def run(args) -> int:
     elif toolpath is not None:
         program = out / f"toolpath_calibrated{FORMATS[args.format].EXTENSION}"
         try:
-            export(toolpath, result, args.format, program, force=args.force, calibration_source=str(out / "result.json"))
+            export(toolpath, result, args.format, program, force=args.force, machine=args.machine,
+                   vertical_tol_deg=args.vertical_tol, rotary=args.rotary, calibration_source=str(out / "result.json"))
             print(f"wrote {program}" + (" (FORCED)" if result.status != OK else ""))
         except ExportRefused as exc:
             print(f"workcal calibrate: toolpath not written: {exc}", file=sys.stderr)

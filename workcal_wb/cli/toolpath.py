@@ -7,10 +7,13 @@ import sys
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, Envelope, ExportRefused, RotaryTable, export,
-                                      format_for, read_gcode)
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, MACHINES, Envelope, ExportOptions, ExportRefused,
+                                      RotaryTable, export, format_for, read_gcode)
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN
 from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
+from workcal_wb.core.toolpath.gcode import BLOCK_DELETE, DWELL_P
+from workcal_wb.core.toolpath.orientation import ROTARY
+from workcal_wb.core.toolpath.safety import DEFAULT_VERTICAL_TOL_DEG
 
 
 def add_parser(subparsers):
@@ -39,7 +42,34 @@ def add_parser(subparsers):
                    help="KRL: 'base' sets $BASE = W and keeps workpiece coordinates; 'transformed' writes points in B")
     p.add_argument("--rapid-feed", type=float, default=DEFAULT_RAPID_FEED_MM_MIN, metavar="MM_PER_MIN",
                    help=f"robot speed for G0 moves (default {DEFAULT_RAPID_FEED_MM_MIN:g} mm/min)")
+    add_machine_options(p)
+    p.add_argument("--max-lines", type=int, metavar="N",
+                   help="lines per program part before a robot program is split into parts called by a main program "
+                        "(default: the controller's limit, e.g. 9999 for Fanuc)")
     return p
+
+
+def add_machine_options(p) -> None:
+    """The options of the target machine and of reading the CAM file (shared with ``calibrate``)."""
+    p.add_argument("--machine", choices=MACHINES,
+                   help="target: 3axis (G-code, refused when W tilts the tool past --vertical-tol), 5axis-tcp "
+                        "(G-code with rotary axes in tool-centre-point mode), robot (KRL, RAPID, URScript, Fanuc, "
+                        "CSV); default 3axis for G-code, robot otherwise")
+    p.add_argument("--vertical-tol", type=float, default=DEFAULT_VERTICAL_TOL_DEG, metavar="DEG",
+                   help=f"3-axis: largest tilt of the tool axis from the machine's Z that W may cause "
+                        f"(default {DEFAULT_VERTICAL_TOL_DEG} deg)")
+    p.add_argument("--rotary", choices=list(ROTARY), default="ab",
+                   help="the machine's two rotary axes, for A/B/C words read and written (default ab)")
+    p.add_argument("--block-delete", choices=BLOCK_DELETE,
+                   help="the block-delete switch for '/' blocks: on skips them, off runs them "
+                        "(required when the file has them)")
+    p.add_argument("--dwell-p", choices=DWELL_P, default="auto",
+                   help="unit of G4 P: auto = milliseconds without a decimal point (Fanuc, Haas), seconds with one")
+
+
+def read_options(args) -> dict:
+    """The reader's settings from the shared options."""
+    return {"rotary": args.rotary, "block_delete": args.block_delete, "dwell_p": args.dwell_p}
 
 
 def _table(args) -> RotaryTable | None:
@@ -62,19 +92,23 @@ def run(args) -> int:
     if args.input.lower().endswith(".fcstd"):
         raise InputError(f"{args.input}: FreeCAD documents are read inside FreeCAD (WorkCal workbench); "
                          "export the Job's G-code, or pass a G-code file here")
-    toolpath = read_gcode(args.input, units=args.units_in)
+    toolpath = read_gcode(args.input, units=args.units_in, **read_options(args))
     calibration = CalibrationResult.from_json(args.calibration)
     fmt = args.format or format_for(args.out)
+    options = ExportOptions(force=args.force, table=_table(args),
+                            envelope=Envelope.parse(args.envelope) if args.envelope else None,
+                            chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
+                            machine=args.machine, vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
+                            max_lines=args.max_lines, calibration_source=args.calibration)
+    for warning in toolpath.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
     try:
-        job = export(toolpath, calibration, fmt, args.out, force=args.force, table=_table(args),
-                     envelope=Envelope.parse(args.envelope) if args.envelope else None,
-                     chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
-                     calibration_source=args.calibration)
+        job = export(toolpath, calibration, fmt, args.out, options)
     except ExportRefused as exc:
         print(f"workcal toolpath: refused: {exc}", file=sys.stderr)
         return EXIT_FAILED
     if job.forced:
         print(f"workcal toolpath: warning: FORCED export of a {calibration.status!r} calibration", file=sys.stderr)
-    print(f"wrote {args.out}: {FORMATS[fmt].NAME}, {len(toolpath)} moves from {args.input}, "
+    print(f"wrote {args.out}: {FORMATS[fmt].NAME} for {job.machine}, {len(toolpath)} moves from {args.input}, "
           f"calibration {calibration.status}")
     return EXIT_OK

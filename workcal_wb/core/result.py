@@ -5,6 +5,7 @@ angles, Omega) are written for the reader but never stored: they are recomputed 
 """
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import asdict, dataclass, field, fields
 
@@ -175,10 +176,14 @@ class CalibrationResult:
         except (TypeError, ValueError) as exc:
             raise InputError(f"{source}: {exc}") from exc
 
+    def to_json_text(self) -> str:
+        """The text ``to_json`` writes (``result_fingerprint`` hashes it)."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=True)
+
     def to_json(self, path) -> None:
         from .atomic import atomic_write_text
 
-        atomic_write_text(path, json.dumps(self.to_dict(), indent=2, allow_nan=True))
+        atomic_write_text(path, self.to_json_text())
 
     @classmethod
     def from_json(cls, path) -> "CalibrationResult":
@@ -190,3 +195,9 @@ class CalibrationResult:
         except json.JSONDecodeError as exc:
             raise InputError(f"{path}: not valid JSON ({exc})") from exc
         return cls.from_dict(data, str(path))
+
+
+def result_fingerprint(result: CalibrationResult) -> str:
+    """The first 16 hex digits of the SHA-256 of the result's JSON: of result.json's bytes as ``to_json``
+    writes them, so every exported program names the result it came from."""
+    return hashlib.sha256(result.to_json_text().encode("utf-8")).hexdigest()[:16]

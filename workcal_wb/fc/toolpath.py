@@ -11,9 +11,11 @@ import Path
 
 from workcal_wb.core.errors import InputError, MissingDependency
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import DEFAULT_CHORD_TOL_MM, Envelope, RotaryTable, Toolpath, parse_gcode, transformed
-from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, robot_poses
-from workcal_wb.core.toolpath.gcode import blocks
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, Envelope, ExportOptions, RotaryTable, Toolpath, parse_gcode,
+                                      transformed)
+from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, robot_path
+from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES
+from workcal_wb.core.toolpath.model import ARC_CCW, ARC_CW, KINDS
 from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
 from workcal_wb.fc.placements import placement
 
@@ -57,6 +59,29 @@ def read_toolpath(obj) -> Toolpath:
     return parse_gcode("\n".join(lines), source=source)
 
 
+def _commands(path: Toolpath) -> list:
+    """Path commands of a toolpath whose arcs lie in a machine plane: positions only (see make_path_object)."""
+    commands = []
+    starts, arc = path.starts(), -1
+    for i in range(len(path)):
+        commands += [Path.Command(f"({c})") for c in path.comments.get(i, "").split("\n") if c]
+        kind = KINDS[path.kind[i]]
+        params = dict(zip(AXES, map(float, path.end[i])))
+        if kind in (ARC_CW, ARC_CCW):
+            arc += 1
+            normal, centre = path.arc_normal[arc], path.arc_centre[arc]
+            axis = int(abs(normal).argmax())
+            if normal[axis] < 0:
+                kind = ARC_CW if kind == ARC_CCW else ARC_CCW
+            plane = PLANE_OF_AXIS[axis]
+            commands.append(Path.Command(f"G{plane}"))
+            params.update({k: float(centre[OFFSET_AXIS[k]] - starts[i][OFFSET_AXIS[k]]) for k in PLANES[plane][1]})
+        if kind != "rapid":
+            params["F"] = float(path.feed[i]) / SECONDS_PER_MINUTE
+        commands.append(Path.Command(MOTION_CODE[kind], params))
+    return commands
+
+
 def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
                      envelope: Envelope | None = None, table: RotaryTable | None = None,
                      chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, name: str = "WorkCalPath"):
@@ -64,14 +89,12 @@ def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *,
 
     Positions only: FreeCAD's Path treats A/B words as rotary axes and would draw the path displaced,
     so the tool axis (in every exported program) is not written into the Path object."""
-    T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
-                                  chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
+    options = ExportOptions(force=force, envelope=envelope, table=table, chord_tol_mm=chord_tol_mm,
+                            calibration_source=f"calibration for {name}")
+    T, forced = checked_placement(toolpath, calibration, options)
     moved = transformed(toolpath, T, chord_tol_mm)
     header = (forced_banner(calibration) if forced else []) + moved.header
-    commands = [Path.Command(f"({c})") for c in header]
-    for block in blocks(moved):
-        params = {k: v / SECONDS_PER_MINUTE if k == "F" else v for k, v in block.words.items() if k not in "AB"}
-        commands += [Path.Command(f"({c})") for c in block.comments] + [Path.Command(block.code, params)]
+    commands = [Path.Command(f"({c})") for c in header] + _commands(moved)
     commands += [Path.Command(f"({c})") for c in moved.footer]
     obj = doc.addObject("Path::Feature", name)
     obj.Path = Path.Path(commands)
@@ -101,11 +124,13 @@ def make_robot_trajectory(doc, toolpath: Toolpath, calibration: CalibrationResul
     except ImportError as exc:
         raise MissingDependency("FreeCAD's Robot workbench is not available in this FreeCAD; "
                                 "export KRL or CSV instead") from exc
-    T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
-                                  chord_tol_mm=chord_tol_mm, source=f"calibration for {name}")
-    waypoints = [Robot.Waypoint(placement(pose.matrix), type="LIN", name=f"P{i}",
-                                vel=pose.feed_mm_min / SECONDS_PER_MINUTE, cont=False)
-                 for i, pose in enumerate(robot_poses(toolpath, T, chord_tol_mm, rapid_feed_mm_min), start=1)]
+    options = ExportOptions(force=force, envelope=envelope, table=table, chord_tol_mm=chord_tol_mm,
+                            rapid_feed_mm_min=rapid_feed_mm_min, calibration_source=f"calibration for {name}")
+    T, forced = checked_placement(toolpath, calibration, options)
+    path = robot_path(ExportJob(toolpath, calibration, T, forced, None, options, "robot"), in_base_frame=True,
+                      max_speed_mm_s=float("inf"))
+    waypoints = [Robot.Waypoint(placement(path.matrix(i)), type="LIN", name=f"P{i + 1}",
+                                vel=float(path.feed[i]) / SECONDS_PER_MINUTE, cont=False) for i in range(len(path))]
     obj = doc.addObject("Robot::TrajectoryObject", name)
     obj.Trajectory = Robot.Trajectory(waypoints)
     if forced:

@@ -127,6 +127,16 @@ def _run_large(method: str, path: str, seed: int, queue) -> None:
                "displacement_mm": disp, "status": status, "peak_rss_mb": _peak_mb()})
 
 
+def _run_gcode(queue) -> None:
+    """Child process: the G-code throughput row (core/toolpath/benchmark.py)."""
+    from ..toolpath import benchmark
+
+    with tempfile.TemporaryDirectory() as folder:
+        source = Path(folder) / "raster.nc"
+        benchmark.write_sample(source)
+        queue.put(benchmark.measure(source, Path(folder) / "out.nc"))
+
+
 def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
 
@@ -166,9 +176,10 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
                      triangles=case.model.triangles)
             del case
             large = [_in_child(_run_large, method, path, seed) for method in METHODS]
+    gcode = None if quick else _in_child(_run_gcode)
     note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
                                               "the bunny cases were skipped.")
-    report = _table(per_method, large, seed, quick, rounds, note)
+    report = _table(per_method, large, seed, quick, rounds, note, gcode)
     atomic_write_text(out, report.text)
     return report
 
@@ -238,9 +249,15 @@ def _missed(numbers: dict, large: list) -> list:
     return missed
 
 
-def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, note: str | None) -> Report:
+def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, note: str | None,
+           gcode: dict | None = None) -> Report:
+    from ..toolpath.benchmark import TARGET_BYTES_PER_MOVE, TARGET_S, table
+
     lines, numbers = _summary_rows(per_method)
     missed = _missed(numbers, large)
+    if gcode and not (gcode["total_s"] < TARGET_S and gcode["bytes_per_move"] < TARGET_BYTES_PER_MOVE):
+        missed.append(f"G-code: {gcode['total_s']:.1f} s and {gcode['bytes_per_move']:.0f} bytes per move for "
+                      f"{gcode['moves']:,} moves (target under {TARGET_S:g} s and {TARGET_BYTES_PER_MOVE:g} bytes)")
     text = [
         "# Benchmark: WorkCal matcher vs stock Open3D",
         "",
@@ -298,6 +315,7 @@ def _table(per_method: dict, large: list, seed: int, quick: bool, rounds: int, n
                  f"{_fmt(e['displacement_mm'])} | {e['time_s']:.2f} | {e['peak_rss_mb']:.0f} |" for e in large]
         text += ["", "The simulated car scanned at a 0.2 mm pitch with the platform and L-block around it, matched "
                  "cold (model preparation included), each method in its own process.", ""]
+    text += table(gcode) if gcode else []
     text += ["## Targets", ""]
     text += [f"- missed: {m}" for m in missed] or ["- all met (see the issue: 100 % bunny success, median error no "
                                                    "worse than stock, at most half of stock's median time, simulated "

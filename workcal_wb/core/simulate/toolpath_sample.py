@@ -55,5 +55,5 @@ def sample_toolpath(scene, retract_mm: float = 20.0):
     moves = [Move(RAPID, points[0] + retract_mm * up, tool_axis=up)]
     moves += [Move(LINEAR, p, feed=feed, tool_axis=up) for p in points]
     moves.append(Move(RAPID, points[-1] + retract_mm * up, tool_axis=up))
-    return Toolpath(moves, header=[f"WorkCal sample finishing pass over {scene.workpiece_original.name}, "
+    return Toolpath.from_moves(moves, header=[f"WorkCal sample finishing pass over {scene.workpiece_original.name}, "
                                    "workpiece frame X, mm"], source="sample toolpath")

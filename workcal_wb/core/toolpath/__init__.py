@@ -4,11 +4,12 @@ Read a path in the workpiece frame X (``read_gcode``, or ``workcal_wb.fc.toolpat
 jobs), then ``export`` it through W = ^B X to KRL, RAPID, URScript, Fanuc LS, G-code or CSV.
 """
 from .exporters import FORMATS, export, format_for
-from .gcode import format_gcode, parse_gcode, read_gcode
-from .model import ARC_CCW, ARC_CW, LINEAR, RAPID, Move, RotaryTable, Toolpath
-from .safety import Envelope, ExportRefused, checked_placement
-from .transform import DEFAULT_CHORD_TOL_MM, linearised, placement, transformed
+from .exporters.gcode import format_gcode
+from .gcode import parse_gcode, read_gcode
+from .model import ARC_CCW, ARC_CW, LINEAR, RAPID, Event, Move, RotaryTable, Toolpath
+from .safety import MACHINES, Envelope, ExportOptions, ExportRefused, checked_placement
+from .transform import DEFAULT_CHORD_TOL_MM, linearised, path_points, placement, transformed
 
-__all__ = ["FORMATS", "export", "format_for", "format_gcode", "parse_gcode", "read_gcode", "ARC_CCW", "ARC_CW",
-           "LINEAR", "RAPID", "Move", "RotaryTable", "Toolpath", "Envelope", "ExportRefused", "checked_placement",
-           "DEFAULT_CHORD_TOL_MM", "linearised", "placement", "transformed"]
+__all__ = ["FORMATS", "export", "format_for", "format_gcode", "parse_gcode", "read_gcode", "ARC_CCW", "ARC_CW", "LINEAR", "RAPID",
+           "Event", "Move", "RotaryTable", "Toolpath", "MACHINES", "Envelope", "ExportOptions", "ExportRefused",
+           "checked_placement", "DEFAULT_CHORD_TOL_MM", "linearised", "path_points", "placement", "transformed"]

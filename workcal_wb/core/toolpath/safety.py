@@ -1,4 +1,5 @@
-"""What keeps a bad program off a controller: finite numbers, a work envelope, the calibration's gates.
+"""What keeps a bad program off a controller: finite numbers, a sane W, a work envelope, the machine's
+axes, the calibration's gates.
 
 Every check runs before a single byte is written; together with atomic writing this means a refused
 export leaves no file behind and an older file untouched.
@@ -13,8 +14,16 @@ import numpy as np
 from .. import frames
 from ..errors import InputError, WorkCalError
 from ..result import OK, CalibrationResult
-from .model import RotaryTable
+from . import orientation
+from .model import RotaryTable, Toolpath
 from .transform import DEFAULT_CHORD_TOL_MM, path_points, placement
+
+# No robot cell or machine tool reaches past this (mm from the base frame's origin): a W or a point
+# beyond it is a broken calibration or a unit mix-up, refused even without an --envelope.
+SANITY_MM = 50_000.0
+MACHINES = ("3axis", "5axis-tcp", "robot")
+# Largest tilt of the tool axis from the machine's Z that a 3-axis export accepts unless told otherwise.
+DEFAULT_VERTICAL_TOL_DEG = 0.05
 
 
 class ExportRefused(WorkCalError):
@@ -22,11 +31,22 @@ class ExportRefused(WorkCalError):
 
 
 def number(value: float, decimals: int) -> str:
-    """Fixed-point text of a finite number; every number an exporter writes goes through here."""
+    """Fixed-point text of a finite number; every single number an exporter writes goes through here
+    or through ``numbers`` (the same rule for a column)."""
     if not math.isfinite(value):
         raise ExportRefused(f"refusing to write a non-finite number ({value})")
     text = f"{value:.{decimals}f}"
     return text.lstrip("-") if float(text) == 0 else text  # "0.000", never "-0.000"
+
+
+def numbers(values, decimals: int) -> list[str]:
+    """``number`` for a whole array (read in C order): values that round to zero are written unsigned."""
+    values = np.asarray(values, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(values)):
+        raise ExportRefused("refusing to write a non-finite number")
+    values = np.where(np.abs(values) < 0.5 * 10.0 ** -decimals, 0.0, values)
+    form = f"%.{decimals}f"
+    return [form % v for v in values.tolist()]
 
 
 @dataclass
@@ -54,35 +74,100 @@ class Envelope:
         return ", ".join(f"{a} [{lo:g}, {hi:g}]" for a, lo, hi in zip("xyz", self.lower, self.upper))
 
 
-def _where(toolpath, index: int) -> str:
-    line = toolpath.moves[index].line
-    return f"move {index + 1}" + (f" (line {line})" if line is not None else "")
+SANITY_ENVELOPE = Envelope(np.full(3, -SANITY_MM), np.full(3, SANITY_MM))
 
 
-def check_moves(toolpath) -> None:
+@dataclass
+class ExportOptions:
+    """How to export: safety settings, the target machine and each language's choices (settings as data)."""
+
+    force: bool = False
+    envelope: Envelope | None = None
+    table: RotaryTable | None = None
+    chord_tol_mm: float = DEFAULT_CHORD_TOL_MM
+    machine: str | None = None  # None: "3axis" for G-code, "robot" for the robot formats
+    vertical_tol_deg: float = DEFAULT_VERTICAL_TOL_DEG
+    rotary: str = "ab"  # 5-axis G-code: the machine's two rotary axes (orientation.ROTARY)
+    krl_mode: str = "base"
+    rapid_feed_mm_min: float = 6000.0
+    max_lines: int | None = None  # lines per program part; None: the language's own limit
+    calibration_source: str = "calibration"
+
+    def check(self) -> None:
+        if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm > 0):
+            raise InputError(f"chordal tolerance must be a positive number of mm, not {self.chord_tol_mm}")
+        if self.machine is not None and self.machine not in MACHINES:
+            raise InputError(f"unknown machine {self.machine!r}; use one of {', '.join(MACHINES)}")
+        if not (math.isfinite(self.vertical_tol_deg) and 0 <= self.vertical_tol_deg < 90):
+            raise InputError(f"vertical tolerance must be between 0 and 90 degrees, not {self.vertical_tol_deg}")
+        if self.rotary not in orientation.ROTARY:
+            raise InputError(f"unknown rotary axes {self.rotary!r}; use one of {', '.join(orientation.ROTARY)}")
+        if not (math.isfinite(self.rapid_feed_mm_min) and self.rapid_feed_mm_min > 0):
+            raise InputError(f"rapid feed must be a positive number of mm/min, not {self.rapid_feed_mm_min}")
+        if self.max_lines is not None and self.max_lines < 10:
+            raise InputError(f"lines per program part must be at least 10, not {self.max_lines}")
+
+
+def check_moves(toolpath: Toolpath) -> None:
     """Refuse non-finite feeds and tool axes (positions are checked in B by ``check_positions``)."""
-    for i, move in enumerate(toolpath.moves):
-        values = list(move.tool_axis) + ([] if move.feed is None else [move.feed])
-        if not all(map(math.isfinite, values)):
-            raise ExportRefused(f"{toolpath.source}: {_where(toolpath, i)} has a non-finite feed or tool axis; "
-                                "nothing was written")
+    bad_feed = np.isinf(toolpath.feed) | (~np.isnan(toolpath.feed) & ~np.isfinite(toolpath.feed))
+    bad_axis = ~np.all(np.isfinite(toolpath.axes()), axis=1)
+    bad = np.flatnonzero(bad_feed | bad_axis | (np.isnan(toolpath.feed) & (toolpath.kind > 0)))
+    if bad.size:
+        raise ExportRefused(f"{toolpath.source}: {toolpath.where(int(bad[0]))} has a non-finite feed or tool axis; "
+                            "nothing was written")
 
 
-def check_positions(points_B: np.ndarray, owners, toolpath, envelope: Envelope | None) -> None:
-    """Refuse the first non-finite or out-of-envelope point; ``owners[k]`` is the move of point k."""
-    finite = np.all(np.isfinite(points_B), axis=1)
-    inside = finite if envelope is None else finite & np.all(
-        (points_B >= envelope.lower) & (points_B <= envelope.upper), axis=1)
-    bad = np.flatnonzero(~inside)
-    if bad.size == 0:
-        return
-    k = int(bad[0])
-    where = _where(toolpath, int(owners[k]))
-    if not finite[k]:
-        raise ExportRefused(f"{toolpath.source}: {where} has a non-finite position; nothing was written")
-    x, y, z = points_B[k]
-    raise ExportRefused(f"{toolpath.source}: {where} reaches ({x:.3f}, {y:.3f}, {z:.3f}) mm in the robot base "
-                        f"frame, outside the work envelope {envelope.describe()}; nothing was written")
+def check_positions(points_B: np.ndarray, where, source: str, envelope: Envelope | None) -> None:
+    """Refuse the first non-finite or out-of-envelope point; ``where(k)`` names point k in the message."""
+    for box, what in ((SANITY_ENVELOPE, None), (envelope, "envelope")):
+        if box is None:
+            continue
+        finite = np.all(np.isfinite(points_B), axis=1)
+        inside = finite & np.all((points_B >= box.lower) & (points_B <= box.upper), axis=1)
+        bad = np.flatnonzero(~inside)
+        if bad.size == 0:
+            continue
+        k = int(bad[0])
+        if not finite[k]:
+            raise ExportRefused(f"{source}: {where(k)} has a non-finite position; nothing was written")
+        x, y, z = points_B[k]
+        reach = (f"outside the work envelope {box.describe()}" if what else
+                 f"more than {SANITY_MM / 1000:g} m from the base frame, which no machine reaches (check the "
+                 "calibration and the units)")
+        raise ExportRefused(f"{source}: {where(k)} reaches ({x:.3f}, {y:.3f}, {z:.3f}) mm in the robot base "
+                            f"frame, {reach}; nothing was written")
+
+
+def check_sanity(T: np.ndarray, source: str) -> None:
+    """Refuse a placement that moves the workpiece farther than any machine reaches."""
+    distance = float(np.linalg.norm(T[:3, 3]))
+    if not distance <= SANITY_MM:
+        raise ExportRefused(f"{source}: W moves the workpiece {distance:.6g} mm from the robot base frame, farther "
+                            f"than any machine reaches ({SANITY_MM / 1000:g} m): the calibration is broken or in the "
+                            "wrong units; nothing was written")
+
+
+def check_vertical(toolpath: Toolpath, T: np.ndarray, tolerance_deg: float) -> float:
+    """For a 3-axis machine: the largest tilt (deg) of the tool axis from the machine's Z; refuses past
+    ``tolerance_deg`` with what to do."""
+    axes = orientation.VERTICAL[None] if toolpath.tool_axis is None else toolpath.tool_axis
+    tilts = orientation.tilt_deg(axes @ T[:3, :3].T)
+    i = int(np.argmax(tilts))
+    tilt = float(tilts[i])
+    if tilt <= tolerance_deg:
+        return tilt
+    if len(np.unique(np.round(axes, 9), axis=0)) > 1:
+        raise ExportRefused(f"{toolpath.source}: {toolpath.where(i)} tilts the tool {tilt:.3f} deg from the machine's "
+                            "Z: a 3-axis machine cannot follow this 5-axis toolpath; export for a 5-axis machine "
+                            "(--machine 5axis-tcp); nothing was written")
+    raise ExportRefused(
+        f"{toolpath.source}: W tilts the tool axis {tilt:.4f} deg from the machine's Z, more than the 3-axis "
+        f"tolerance {tolerance_deg:g} deg, so a 3-axis machine cannot hold the tool as the toolpath means. "
+        "Level the part on the table (shim it) and calibrate again, accept the tilt for your tool with "
+        f"--vertical-tol {math.ceil(tilt * 100) / 100:g} or more, or export for a 5-axis machine "
+        "(--machine 5axis-tcp); nothing was written")
+    return tilt
 
 
 def value_text(value) -> str:
@@ -126,21 +211,23 @@ def forced_banner(calibration: CalibrationResult) -> list[str]:
     ]
 
 
-def checked_placement(toolpath, calibration: CalibrationResult, *, force: bool = False,
-                      envelope: Envelope | None = None, table: RotaryTable | None = None,
-                      chord_tol_mm: float = DEFAULT_CHORD_TOL_MM,
-                      source: str = "calibration") -> tuple[np.ndarray, bool]:
+def checked_placement(toolpath: Toolpath, calibration: CalibrationResult, options: ExportOptions,
+                      machine: str = "robot") -> tuple[np.ndarray, bool]:
     """Every check an export needs, in one place: (X -> B transform to use, whether forced).
 
     Positions are checked in B along the whole path (arcs sampled within the chordal tolerance), so a
-    program written in workpiece coordinates is held to the same envelope as one written in B."""
-    if not (math.isfinite(chord_tol_mm) and chord_tol_mm > 0):
-        raise InputError(f"chordal tolerance must be a positive number of mm, not {chord_tol_mm}")
-    if not toolpath.moves:
+    program written in workpiece coordinates is held to the same envelope as one written in B; the
+    sanity bound applies whether or not an envelope is given."""
+    options.check()
+    if not len(toolpath):
         raise InputError(f"{toolpath.source}: no moves to export")
-    forced = check_calibration(calibration, force, source)
-    T = placement(calibration.W, table)
+    forced = check_calibration(calibration, options.force, options.calibration_source)
+    T = placement(calibration.W, options.table)
+    check_sanity(T, options.calibration_source)
     check_moves(toolpath)
-    points, owners = path_points(toolpath, chord_tol_mm)
-    check_positions(frames.apply(T, points), owners, toolpath, envelope)
+    if machine == "3axis":
+        check_vertical(toolpath, T, options.vertical_tol_deg)
+    points, owners = path_points(toolpath, options.chord_tol_mm)
+    check_positions(frames.apply(T, points), lambda k: toolpath.where(int(owners[k])), toolpath.source,
+                    options.envelope)
     return T, forced

@@ -1,8 +1,9 @@
-"""Move a toolpath from the workpiece frame X into the robot base frame B.
+"""Move a toolpath from the workpiece frame X into the robot base frame B (whole columns at once).
 
 FreeCAD's ``Path.Command.transform`` does not rotate points, so WorkCal transforms every point, arc
 centre, arc normal and tool axis itself.  An arc stays an arc when its rotated plane is still a
-machine plane (XY, ZX or YZ); otherwise it becomes line segments within a chordal tolerance.
+machine plane (XY, ZX or YZ) closely enough that the machine's arc in that plane stays within the
+chordal tolerance of the true one; otherwise it becomes line segments within that tolerance.
 """
 from __future__ import annotations
 
@@ -13,10 +14,9 @@ import numpy as np
 from .. import frames
 from ..errors import InputError
 from . import arcs
-from .model import LINEAR, Move, RotaryTable, Toolpath
+from .model import CODE, LINEAR, ARC_CCW, RotaryTable, Toolpath
 
 DEFAULT_CHORD_TOL_MM = 0.01
-_AXIS_COS = 1 - 1e-9  # a rotated arc normal this close to X, Y or Z keeps its arc (round-off only)
 
 
 def placement(W: np.ndarray, table: RotaryTable | None = None) -> np.ndarray:
@@ -30,53 +30,91 @@ def placement(W: np.ndarray, table: RotaryTable | None = None) -> np.ndarray:
     return frames.compose(BQ, frames.rigid(frames.rot_z(table.angle_deg)), frames.invert(BQ), W)
 
 
-def _segments(start: np.ndarray, move: Move, chord_tol_mm: float) -> list[Move]:
-    points = arcs.linearise(start, move, chord_tol_mm)
-    return [replace(move, kind=LINEAR, end=p, centre=None, normal=None, comment=move.comment if i == 0 else "")
-            for i, p in enumerate(points)]
+def _arc_rows(toolpath: Toolpath):
+    """Start, end, ccw flag of every arc, in the order of ``arc_centre``."""
+    index = np.flatnonzero(toolpath.arc_mask)
+    return toolpath.starts()[index], toolpath.end[index], toolpath.kind[index] == CODE[ARC_CCW], index
+
+
+def _remap(mapping: dict, first: np.ndarray) -> dict:
+    return {int(first[i]): v for i, v in mapping.items()}
+
+
+def _expand(toolpath: Toolpath, split: np.ndarray, chord_tol_mm: float) -> Toolpath:
+    """The path with the arcs marked in ``split`` (one flag per arc) replaced by chords."""
+    if not split.any():
+        return toolpath
+    starts, ends, ccw, index = _arc_rows(toolpath)
+    points, pieces = arcs.linearise(starts[split], ends[split], toolpath.arc_centre[split],
+                                    toolpath.arc_normal[split], ccw[split], chord_tol_mm)
+    n = len(toolpath)
+    counts = np.ones(n, dtype=np.int64)
+    counts[index[split]] = pieces
+    owner = np.repeat(np.arange(n), counts)
+    first = np.append(np.cumsum(counts) - counts, counts.sum())
+    chords = np.zeros(n, dtype=bool)
+    chords[index[split]] = True
+    chord_rows = chords[owner]
+    kind, end = toolpath.kind[owner], toolpath.end[owner]
+    kind[chord_rows] = CODE[LINEAR]
+    end[chord_rows] = points
+    axes = toolpath.tool_axis
+    return toolpath.with_columns(
+        kind=kind, end=end, feed=toolpath.feed[owner], line=toolpath.line[owner],
+        tool_axis=axes if axes is None or len(axes) == 1 else axes[owner],
+        arc_centre=toolpath.arc_centre[~split], arc_normal=toolpath.arc_normal[~split],
+        comments=_remap(toolpath.comments, first), partial=_remap(toolpath.partial, first),
+        events=[replace(e, before=int(first[e.before])) for e in toolpath.events])
 
 
 def linearised(toolpath: Toolpath, chord_tol_mm: float = DEFAULT_CHORD_TOL_MM) -> Toolpath:
     """The same path with every arc replaced by chords within ``chord_tol_mm`` of it."""
-    moves = []
-    for start, move in zip(toolpath.starts(), toolpath.moves):
-        moves += _segments(start, move, chord_tol_mm) if move.is_arc else [move]
-    return replace(toolpath, moves=moves)
+    return _expand(toolpath, np.ones(len(toolpath.arc_centre), dtype=bool), chord_tol_mm)
 
 
 def path_points(toolpath: Toolpath, chord_tol_mm: float = DEFAULT_CHORD_TOL_MM) -> tuple[np.ndarray, np.ndarray]:
     """Every point the tool passes within ``chord_tol_mm`` (arcs sampled), and the index of its move."""
-    points, owners = [], []
-    for i, (start, move) in enumerate(zip(toolpath.starts(), toolpath.moves)):
-        pts = arcs.linearise(start, move, chord_tol_mm) if move.is_arc else move.end[None]
-        points.append(pts)
-        owners += [i] * len(pts)
-    return np.vstack(points) if points else np.empty((0, 3)), np.array(owners, dtype=int)
+    starts, ends, ccw, index = _arc_rows(toolpath)
+    if not len(index):
+        return toolpath.end, np.arange(len(toolpath))
+    points, pieces = arcs.linearise(starts, ends, toolpath.arc_centre, toolpath.arc_normal, ccw, chord_tol_mm)
+    counts = np.ones(len(toolpath), dtype=np.int64)
+    counts[index] = pieces
+    owner = np.repeat(np.arange(len(toolpath)), counts)
+    out = toolpath.end[owner]
+    is_arc = np.zeros(len(toolpath), dtype=bool)
+    is_arc[index] = True
+    out[is_arc[owner]] = points
+    return out, owner
 
 
-def _machine_normal(normal: np.ndarray) -> np.ndarray | None:
-    """``normal`` snapped to +-X, +-Y or +-Z, or None when it is not along one of them."""
-    axis = int(np.argmax(np.abs(normal)))
-    if abs(normal[axis]) < _AXIS_COS:
-        return None
-    snapped = np.zeros(3)
-    snapped[axis] = np.sign(normal[axis])
-    return snapped
+def _machine_normals(normals: np.ndarray, radii: np.ndarray, chord_tol_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Normals snapped to +-X, +-Y or +-Z, and whether the arc may keep it: the machine's arc in that
+    plane strays from the true one by at most 2 r sin(angle between the planes)."""
+    axis = np.argmax(np.abs(normals), axis=1)
+    along = np.abs(normals[np.arange(len(normals)), axis])
+    sine = np.sqrt(np.clip(1 - along ** 2, 0, None))
+    keep = (sine < 1e-9) | (2 * radii * sine <= chord_tol_mm)
+    snapped = np.zeros_like(normals)
+    snapped[np.arange(len(normals)), axis] = np.sign(normals[np.arange(len(normals)), axis])
+    return snapped, keep
 
 
 def transformed(toolpath: Toolpath, T: np.ndarray, chord_tol_mm: float = DEFAULT_CHORD_TOL_MM) -> Toolpath:
     """The toolpath in the frame T maps into (p' = T p), with tool axes rotated by T."""
     T = np.asarray(T, dtype=float)
-    moves = []
-    for start, move in zip(toolpath.starts(), toolpath.moves):
-        normal = None if not move.is_arc else _machine_normal(frames.apply_vectors(T, move.normal[None])[0])
-        pieces = _segments(start, move, chord_tol_mm) if move.is_arc and normal is None else [move]
-        for piece in pieces:
-            moves.append(replace(
-                piece,
-                end=frames.apply(T, piece.end[None])[0],
-                tool_axis=frames.apply_vectors(T, piece.tool_axis[None])[0],
-                centre=None if not piece.is_arc else frames.apply(T, piece.centre[None])[0],
-                normal=normal if piece.is_arc else None,
-            ))
-    return replace(toolpath, moves=moves)
+    R, t = T[:3, :3], T[:3, 3]
+    axes = toolpath.tool_axis
+    moved = toolpath.with_columns(
+        end=toolpath.end @ R.T + t,
+        tool_axis=(np.array([[0.0, 0.0, 1.0]]) if axes is None else axes) @ R.T,
+        arc_centre=toolpath.arc_centre @ R.T + t, arc_normal=toolpath.arc_normal @ R.T)
+    if not len(moved.arc_centre):
+        return moved
+    starts, _, _, _ = _arc_rows(moved)
+    radii = arcs.radius(starts, moved.arc_centre, moved.arc_normal).reshape(-1)
+    snapped, keep = _machine_normals(moved.arc_normal, radii, chord_tol_mm)
+    rise = np.sum((moved.arc_centre - starts) * snapped, axis=1, keepdims=True)
+    centres = np.where(keep[:, None], moved.arc_centre - rise * snapped, moved.arc_centre)
+    normals = np.where(keep[:, None], snapped, moved.arc_normal)
+    return _expand(moved.with_columns(arc_centre=centres, arc_normal=normals), ~keep, chord_tol_mm)

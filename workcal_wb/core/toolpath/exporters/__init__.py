@@ -1,18 +1,22 @@
-"""One module per target format, each with NAME, EXTENSION and ``render(job) -> str``; ``export`` runs them.
+"""One module per target format, each with NAME, EXTENSION, MACHINES and ``render(job)``; ``export`` runs them.
 
-``export`` is the only way a program reaches the disk: checks first (calibration gates, finite numbers,
-work envelope in B), then the text is rendered in memory and written atomically.
+``render(job)`` yields the files of the program, ``(path, chunks)``: for a program over the controller's
+size limit its numbered parts first, then the main program at ``job.out``.
+``export`` is the only way a program reaches the disk: checks first (calibration gates, sanity bound,
+finite numbers, work envelope in B, the machine's axes), then each file is written atomically, parts
+first and the main program last; a failure removes what this export wrote, and parts left by an
+earlier, longer export of the same program are removed.
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
-from ...atomic import atomic_write_text
+from ...atomic import atomic_open
 from ...errors import InputError
 from ...result import CalibrationResult
-from ..model import RotaryTable, Toolpath
-from ..safety import Envelope, checked_placement
-from ..transform import DEFAULT_CHORD_TOL_MM
+from ..model import Toolpath
+from ..safety import ExportOptions, checked_placement
 from . import common, csv, fanuc, gcode, krl, rapid, urscript
 
 FORMATS = {"krl": krl, "rapid": rapid, "urscript": urscript, "fanuc": fanuc, "gcode": gcode, "csv": csv}
@@ -28,21 +32,50 @@ def format_for(path) -> str:
     raise InputError(f"{path}: cannot tell the output format from the extension; use one of {known} or name the format")
 
 
-def export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, out, *, force: bool = False,
-           envelope: Envelope | None = None, table: RotaryTable | None = None,
-           chord_tol_mm: float = DEFAULT_CHORD_TOL_MM,
-           krl_mode: str = "base", rapid_feed_mm_min: float = common.DEFAULT_RAPID_FEED_MM_MIN,
-           calibration_source: str = "calibration") -> common.ExportJob:
-    """Write ``toolpath`` (workpiece frame, mm) as ``fmt`` to ``out``; refuses (ExportRefused) before writing."""
+def machine_for(fmt: str, machine: str | None) -> str:
+    """The machine a format writes for: the one asked, if the format can; otherwise its first."""
+    module = FORMATS[fmt]
+    if machine is None:
+        return module.MACHINES[0]
+    if machine not in module.MACHINES:
+        raise InputError(f"{module.NAME} is written for {' or '.join(module.MACHINES)}, not --machine {machine}")
+    return machine
+
+
+def export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, out, options: ExportOptions | None = None,
+           **settings) -> common.ExportJob:
+    """Write ``toolpath`` (workpiece frame, mm) as ``fmt`` to ``out``; refuses (ExportRefused) before writing.
+
+    ``settings`` are ``ExportOptions`` fields (force, envelope, machine, ...), for callers without one."""
     if fmt not in FORMATS:
         raise InputError(f"unknown output format {fmt!r}; use one of {', '.join(FORMATS)}")
-    if krl_mode not in krl.MODES:
-        raise InputError(f"unknown KRL mode {krl_mode!r}; use one of {', '.join(krl.MODES)}")
-    if not rapid_feed_mm_min > 0:
-        raise InputError(f"rapid feed must be a positive number of mm/min, not {rapid_feed_mm_min}")
-    T, forced = checked_placement(toolpath, calibration, force=force, envelope=envelope, table=table,
-                                  chord_tol_mm=chord_tol_mm, source=calibration_source)
-    job = common.ExportJob(toolpath, calibration, T, forced, Path(out), chord_tol_mm, table, krl_mode,
-                           rapid_feed_mm_min)
-    atomic_write_text(job.out, FORMATS[fmt].render(job))
+    options = options or ExportOptions(**settings)
+    machine = machine_for(fmt, options.machine)
+    T, forced = checked_placement(toolpath, calibration, options, machine)
+    job = common.ExportJob(toolpath, calibration, T, forced, Path(out), options, machine)
+    files = FORMATS[fmt].render(job)
+    written = []
+    try:
+        for path, chunks in files:  # parts first, the main program last
+            with atomic_open(path) as fh:
+                for chunk in chunks:
+                    fh.write(chunk)
+            written.append(Path(path))
+    except BaseException:
+        for path in written:
+            path.unlink(missing_ok=True)
+        raise
+    _remove_stale_parts(job.out, written)
     return job
+
+
+def _remove_stale_parts(out: Path, written: list) -> None:
+    """Parts ``<name>_NNN<ext>`` of an earlier export of this program that this one did not write."""
+    pattern = re.compile(re.escape(out.stem) + r"_\d{3}" + re.escape(out.suffix) + "$", re.IGNORECASE)
+    keep = {p.name.lower() for p in written}
+    for path in out.parent.iterdir():
+        if pattern.match(path.name) and path.name.lower() not in keep:
+            with open(path, "rb") as fh:
+                ours = b"WorkCal" in fh.read(4096)
+            if ours:
+                path.unlink()

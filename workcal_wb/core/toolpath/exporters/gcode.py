@@ -1,22 +1,169 @@
-"""G-code (.nc) in the robot/machine base frame B: arcs kept where W keeps their plane, A/B when the tool tilts."""
+"""G-code (.nc) in the machine's frame B for a 3-axis machine or a 5-axis one in tool-centre-point mode.
+
+Structure: ``%``, comment lines, a safe-start block (mm, absolute, XY plane, no compensation or
+cycle, feed per minute), the CAM file's own events (tool change, spindle, coolant, dwell, stops,
+G28/G53) where it had them, tool-length compensation before the first move (``G43 H`` on a 3-axis
+machine, ``G43.4 H`` tool-centre-point control on a 5-axis one, so XYZ is the tool tip), every move
+with its motion code and full position (a move made after G28/G53 only with the axes its block gave,
+3-axis), ``G49``, ``M30``, ``%``.  Comments never hold ``(``, ``)``, ``;`` or ``%``.
+
+The text is produced in chunks of moves, so a 2-million-move program is never one string in memory.
+"""
 from __future__ import annotations
 
-from ..gcode import IGNORED_G, format_gcode
-from ..orientation import is_vertical
+import numpy as np
+
+from .. import orientation
+from ..gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANES, PLANE_OF_AXIS
+from ..model import (ARC_CCW, ARC_CW, COOLANT, DWELL, FIRST_ARC_CODE, KINDS, LENGTH_OFFSET, SPINDLE, STOP,
+                     TOOL_CHANGE)
+from ..safety import check_vertical, numbers
 from ..transform import transformed
 from . import common
 
 NAME, EXTENSION = "G-code", ".nc"
+MACHINES = ("3axis", "5axis-tcp")
+CHUNK_MOVES = 20_000
+COMMENT_WIDTH = 72
+SAFE_START = "G21 G90 G17 G40 G80 G94"
+TCP_ON = "G43.4"  # Fanuc 30i-family tool-centre-point control; Siemens TRAORI, Heidenhain M128, Haas G234
 
 
-def render(job: common.ExportJob) -> str:
+def comment(text: str) -> str:
+    """A G-code comment: no nested parentheses, no ';' (a comment start) and no '%' (a program boundary)."""
+    return "(" + text.replace("(", "[").replace(")", "]").replace(";", ",").replace("%", " pct") + ")"
+
+
+def _event_blocks(event, machine: str) -> list[str]:
+    n = event.number
+    if event.kind == STOP:
+        return [event.code]
+    if event.kind == TOOL_CHANGE:
+        return [f"T{n} M6"]
+    if event.kind == LENGTH_OFFSET:
+        return ["G49"] if n is None else [f"{TCP_ON if machine == '5axis-tcp' else 'G43'} H{n}"]
+    if event.kind == SPINDLE:
+        code = {"cw": "M3", "ccw": "M4", "off": "M5"}[event.code]
+        return [code if n is None or code == "M5" else f"S{n:g} {code}"]
+    if event.kind == COOLANT:
+        return [{"mist": "M7", "flood": "M8", "off": "M9"}[event.code]]
+    if event.kind == DWELL:
+        return [f"G4 P{n:.3f}"]
+    if event.code.startswith("G28"):
+        return ["G91 G28 " + " ".join(f"{a}0" for a in event.code.split()[1:]), "G90"]
+    return [event.code]  # G53: machine coordinates, the same machine whatever W is
+
+
+def _notes(job: common.ExportJob) -> list[str]:
+    notes = ["units: mm G21, feed F in mm/min, absolute positions G90, arc centres I J K incremental, "
+             "dwell G4 P in seconds",
+             "positions: tool tip in the machine's frame B (make B the active work offset)",
+             f"arcs: kept where their plane stays XY, ZX or YZ within {job.chord_tol_mm} mm, otherwise chords "
+             f"within {job.chord_tol_mm} mm"]
+    if job.machine == "3axis":
+        tilt = check_vertical(job.toolpath, job.transform, job.options.vertical_tol_deg)
+        notes += [f"3-axis: the tool stays along the machine's Z; W tilts the tool axis {tilt:.4f} deg, within the "
+                  f"tolerance {job.options.vertical_tol_deg:g} deg",
+                  "tool length: G43 H before the first move (H of the tool in use, H1 when the file names none)",
+                  "after G28/G53 a move carries only the axes its block gave"]
+    else:
+        rotary = orientation.ROTARY[job.options.rotary]
+        notes += [f"5-axis, tool-centre-point control {TCP_ON} H (Fanuc 30i family; on Siemens use TRAORI, on "
+                  "Heidenhain M128, on Haas G234): XYZ is the tool tip, the control moves the rotary axes",
+                  f"rotary axes {rotary.letters[0]} {rotary.letters[1]} in degrees, the tool's turn relative to the "
+                  f"workpiece (ISO 841 sense): {rotary.formula}; {rotary.letters[1]} is kept continuous",
+                  "after G28/G53 a move carries its full position"]
+    return notes
+
+
+def _first_offset(job: common.ExportJob) -> list[str]:
+    """Length compensation before the first move when the CAM file has none at all."""
+    if any(e.kind == LENGTH_OFFSET for e in job.toolpath.events):
+        return []
+    before_first = [e for e in job.toolpath.events if e.before == 0]
+    tools = [e.number for e in before_first if e.kind == TOOL_CHANGE]
+    h = int(tools[-1]) if tools else 1
+    return [f"{TCP_ON if job.machine == '5axis-tcp' else 'G43'} H{h} {comment('tool length: XYZ is the tool tip')}"]
+
+
+def render(job: common.ExportJob) -> list:
     path = transformed(job.toolpath, job.transform, job.chord_tol_mm)
-    ignored = " ".join(f"G{g:g}" for g in sorted(IGNORED_G))
-    notes = ["units: mm G21, feed F in mm/min, absolute positions G90, arc centres I J K incremental",
-             "positions: tool tip in the robot/machine base frame B",
-             f"arcs: kept where their plane stays XY, ZX or YZ, otherwise chords within {job.chord_tol_mm} mm",
-             f"not carried over: M S T H D words and {ignored}"]
-    if not all(is_vertical(m.tool_axis) for m in path.moves):
-        notes.append("5-axis: A about X, B about Y in degrees, tool axis from tip to spindle = Ry B * Rx A * +Z; "
-                     "XYZ is the tool tip, so the controller needs tool-centre-point control")
-    return format_gcode(path, common.header_lines(job, NAME, notes))
+    header = [comment(h) for h in common.wrapped(common.header_lines(job, NAME, _notes(job)), COMMENT_WIDTH)]
+    return [(job.out, _chunks(path, header, job.machine, job.options.rotary, _first_offset(job)))]
+
+
+def format_gcode(toolpath, header=()) -> str:
+    """G-code of a toolpath in its own frame, with no calibration (the simulator's sample, test files):
+    3-axis when every tool axis is +Z, 5-axis A/B otherwise."""
+    vertical = toolpath.tool_axis is None or np.allclose(toolpath.tool_axis, orientation.VERTICAL, atol=1e-12)
+    lines = [comment(h) for h in list(header) + toolpath.header]
+    return "".join(_chunks(toolpath, lines, "3axis" if vertical else "5axis-tcp", "ab", []))
+
+
+def _feed_words(feed: np.ndarray) -> np.ndarray:
+    """" F..." where a move's feed differs from the last one written, "" elsewhere (rapids write none)."""
+    known = ~np.isnan(feed)
+    index = np.where(known, np.arange(len(feed)), -1)
+    last = np.maximum.accumulate(np.concatenate([[-1], index[:-1]]))
+    previous = np.where(last >= 0, feed[np.maximum(last, 0)], np.nan)
+    write = known & ~(feed == previous)
+    words = np.full(len(feed), "", dtype=object)
+    words[write] = [f" F{v}" for v in numbers(feed[write], 2)]
+    return words
+
+
+def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offset: list[str]):
+    """The program text, CHUNK_MOVES moves at a time: plain moves formatted in bulk, the others
+    (arcs, events, comments, partial moves) one by one."""
+    five_axis = machine == "5axis-tcp"
+    rotary = orientation.ROTARY[rotary_name].letters
+    angles = orientation.rotary_from_tool_axes(rotary_name, path.axes()) if five_axis else None
+    events = common.events_by_move(path.events, len(path))
+    special = path.arc_mask.copy()
+    special[[i for i in set(events) | set(path.comments) | set(path.partial) if i < len(path)]] = True
+    special[:1] = True
+    arc_rows = np.cumsum(path.arc_mask) - 1
+    starts = path.starts()
+    feed_words = _feed_words(path.feed)
+    codes = np.array([MOTION_CODE[k] for k in KINDS], dtype=object)[path.kind]
+    yield "%\n" + "\n".join(header) + "\n" + SAFE_START + "\n"
+    plane = 17
+    for a in range(0, len(path), CHUNK_MOVES):
+        b = min(a + CHUNK_MOVES, len(path))
+        xyz = np.array(numbers(path.end[a:b], 4), dtype=object).reshape(-1, 3)
+        rot = None if angles is None else np.array(numbers(angles[a:b], 4), dtype=object).reshape(-1, 2)
+        tail = ([f" {rotary[0]}{u} {rotary[1]}{v}" for u, v in rot] if rot is not None else [""] * (b - a))
+        lines = [f"{c} X{x} Y{y} Z{z}{t}{f}" for c, (x, y, z), t, f in
+                 zip(codes[a:b], xyz, tail, feed_words[a:b])]
+        for i in np.flatnonzero(special[a:b]) + a:
+            block = []
+            for e in events.get(i, ()):
+                block += _event_blocks(e, machine)
+            if i == 0:
+                block += first_offset
+            k, row = int(path.kind[i]), xyz[i - a]
+            known = path.partial.get(i, AXES) if not five_axis else AXES
+            words = [f"{axis}{row[j]}" for j, axis in enumerate(AXES) if axis in known]
+            code = MOTION_CODE[KINDS[k]]
+            if k >= FIRST_ARC_CODE:
+                r = arc_rows[i]
+                normal, centre = path.arc_normal[r], path.arc_centre[r]
+                axis = int(np.argmax(np.abs(normal)))
+                if normal[axis] < 0:
+                    code = MOTION_CODE[ARC_CW if KINDS[k] == ARC_CCW else ARC_CCW]
+                if PLANE_OF_AXIS[axis] != plane:
+                    plane = PLANE_OF_AXIS[axis]
+                    block.append(f"G{plane}")
+                offset = numbers(centre - starts[i], 4)
+                words += [f"{letter}{offset[OFFSET_AXIS[letter]]}" for letter in PLANES[plane][1]]
+            notes = [comment(c) for c in path.comments.get(i, "").split("\n") if c]  # on the line: they stay its own
+            block.append(" ".join([code, *words]) + tail[i - a] + feed_words[i] + "".join(" " + n for n in notes))
+            lines[i - a] = "\n".join(block)
+        yield "\n".join(lines) + "\n"
+    lines = []
+    for e in events.get(len(path), ()):
+        lines += _event_blocks(e, machine)
+    offsets = [e for e in path.events if e.kind == LENGTH_OFFSET]
+    cancel = [] if offsets and offsets[-1].number is None else ["G49"]
+    lines += [comment(f) for f in path.footer] + cancel + ["M30", "%"]
+    yield "\n".join(lines) + "\n"

@@ -1,43 +1,111 @@
-"""KUKA KRL (.src): LIN moves, with the calibration either in $BASE or already applied to the points.
+"""KUKA KRL (.src): a module the controller loads as written (the krl.g4 grammar's structure).
 
-``base`` mode (default) keeps the path in workpiece coordinates and sets $BASE = W, the way KUKA
-programs are meant to be re-used on a moved part; ``transformed`` writes positions in B.
+``&ACCESS`` lines, then ``DEF name( )`` on the first statement line (no comment may come before it),
+the declaration ``EXT BAS``, the header as ; comments, initialisation (BAS #INITMOV, tool, base),
+a check that the tool is not still the flange, ``PTP XHOME`` (the controller's own home, also the
+BCO run), a PTP to the first point, LIN moves with $VEL.CP, the CAM file's events (HALT with a
+comment, WAIT SEC, tool selection), ``PTP XHOME``, ``END``.  Over ``MAX_LINES`` lines the moves go
+into numbered part modules ``name_001.src`` ... that the main module calls in order.
+
+``base`` mode (default) keeps the path in workpiece coordinates and sets $BASE = $ROBROOT:W, the way
+KUKA programs are meant to be re-used on a moved part; ``transformed`` writes positions in B
+($BASE = $ROBROOT).
 """
 from __future__ import annotations
 
 from ..orientation import kuka_abc_deg
-from ..safety import number
+from ..safety import numbers
 from . import common
 
 NAME, EXTENSION = "KUKA KRL", ".src"
+MACHINES = ("robot",)
 MODES = ("base", "transformed")
-TOOL_NUMBER = 1
+MAX_NAME = 24  # KRL names: at most 24 characters
+MAX_LINES = 2500  # lines per module, as RoboDK's KUKA posts split programs
+MAX_SPEED_MM_S = 2000.0  # $VEL.CP limit of KR C4 ($VEL_MA.CP, 2 m/s on most robots)
+COMMENT_WIDTH = 80
+PTP_PERCENT = 20
+RESERVED = {"DEF", "END", "LIN", "PTP", "CIRC", "HALT", "WAIT", "IF", "FOR", "LOOP", "BAS", "MAIN"}
+ACCESS = ["&ACCESS RVP", "&REL 1"]
+
+
+def frames_text(rotation, position) -> list[str]:
+    """KRL FRAME/POS aggregates {X, Y, Z, A, B, C} (mm, degrees) for stacks of rotations and positions."""
+    values = numbers(position, 4), numbers(kuka_abc_deg(rotation), 4)
+    xyz = [values[0][i:i + 3] for i in range(0, len(values[0]), 3)]
+    abc = [values[1][i:i + 3] for i in range(0, len(values[1]), 3)]
+    return ["{" + ", ".join(f"{k} {v}" for k, v in zip("XYZABC", p + a)) + "}" for p, a in zip(xyz, abc)]
 
 
 def frame(T) -> str:
-    """A KRL FRAME/POS aggregate {X, Y, Z, A, B, C} (mm, degrees)."""
-    values = list(T[:3, 3]) + list(kuka_abc_deg(T))
-    return "{" + ", ".join(f"{k} {number(v, 4)}" for k, v in zip("XYZABC", values)) + "}"
+    return frames_text(T[None, :3, :3], T[None, :3, 3])[0]
 
 
-def render(job: common.ExportJob) -> str:
-    name = common.program_name(job, max_len=24, must_match_file=True)
-    base_mode = job.krl_mode == "base"
-    where = (f"positions: workpiece frame X, relative to $BASE = {common.placement_name(job)}" if base_mode else
-             "positions: robot base frame B, taken as KUKA WORLD ($BASE = $NULLFRAME, $ROBROOT at WORLD)")
+def _event_lines(event) -> list[str]:
+    act = common.action(event)
+    lines = [f";{act.message}"]
+    if act.dwell_s is not None:
+        lines.append(f"WAIT SEC {numbers([act.dwell_s], 3)[0]}")
+    if act.stop:
+        lines.append("HALT")
+    if act.tool is not None:
+        lines.append(f"BAS(#TOOL, {act.tool})")
+    return lines
+
+
+def _moves(path):
+    """The body, one group of lines per target."""
+    targets = frames_text(path.rotation, path.position)
+    speed = [None]
+
+    def move(i, stops):
+        if i == 0:
+            return [f"PTP {targets[0]}"]
+        lines = []
+        if path.feed[i] != speed[0]:
+            speed[0] = path.feed[i]
+            lines.append(f"$VEL.CP = {numbers([speed[0] / 60000.0], 6)[0]}")
+        return lines + [f"LIN {targets[i]}" + ("" if stops(i) else " C_DIS")]
+
+    return common.move_groups(path, _event_lines, lambda c: f";{c}", move)
+
+
+def _module(name: str, head: list[str], body: list[str]) -> str:
+    return "\n".join(ACCESS + [f"DEF {name}( )", "EXT BAS (BAS_COMMAND :IN, REAL :IN)", *head, *body, "END"]) + "\n"
+
+
+def render(job: common.ExportJob):
+    """The main module (and its parts, when over the line limit)."""
+    name = common.program_name(job, MAX_NAME - 4, must_match_file=True, reserved=RESERVED)
+    base_mode = job.options.krl_mode == "base"
+    path = common.robot_path(job, in_base_frame=not base_mode, max_speed_mm_s=MAX_SPEED_MM_S)
+    tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"}) or [1]
+    first_tool = common.first_tool(path)
+    where = (f"positions: workpiece frame X, relative to $BASE = $ROBROOT:{common.placement_name(job)}" if base_mode
+             else "positions: robot base frame B ($BASE = $ROBROOT)")
     notes = ["units: mm, $VEL.CP in m/s, $APO.CDIS in mm",
              "angles: A, B, C in degrees, Z-Y'-X'' (A about Z, then B about the new Y, then C about the new X)",
-             where, f"tool: TOOL_DATA[{TOOL_NUMBER}] must be the spindle's TCP, its Z along the tool into the part",
-             *common.robot_notes(job)]
-    lines = [";" + h for h in common.header_lines(job, NAME, notes)]
-    lines += [f"DEF {name}()", "  BAS(#INITMOV, 0)",
-              f"  $BASE = {frame(job.transform)}" if base_mode else "  $BASE = $NULLFRAME",
-              f"  $TOOL = TOOL_DATA[{TOOL_NUMBER}]", f"  $APO.CDIS = {number(common.BLEND_MM, 3)}"]
-    speed = None
-    for pose in common.poses(job, in_base_frame=not base_mode):
-        lines += [f"  ;{c}" for c in pose.comment.split("\n") if c]
-        if pose.feed_mm_min != speed:
-            speed = pose.feed_mm_min
-            lines.append(f"  $VEL.CP = {number(speed / 60000.0, 6)}")
-        lines.append(f"  LIN {frame(pose.matrix)} C_DIS")
-    return "\n".join(lines + ["END"]) + "\n"
+             where, *common.robot_notes(job, "m/s ($VEL.CP)"),
+             f"PLACEHOLDERS to fill on the controller: TOOL_DATA[{'], TOOL_DATA['.join(map(str, tools))}] = the "
+             "spindle's TCP with that tool, Z along the tool into the part (the program halts while it is unset); "
+             "XHOME = a safe home the robot reaches from anywhere"]
+    head = [f";{h}" for h in common.wrapped(common.header_lines(job, NAME, notes), COMMENT_WIDTH)]
+    setup = ["BAS(#INITMOV, 0)", f"BAS(#TOOL, {first_tool})",
+             f"$BASE = $ROBROOT:{frame(job.transform)}" if base_mode else "$BASE = $ROBROOT",
+             f"IF (TOOL_DATA[{first_tool}].X == 0) AND (TOOL_DATA[{first_tool}].Y == 0) AND "
+             f"(TOOL_DATA[{first_tool}].Z == 0) THEN",
+             f";TOOL_DATA[{first_tool}] is still the flange: set the spindle's TCP, then restart", "HALT", "ENDIF",
+             f"$APO.CDIS = {numbers([common.BLEND_MM], 3)[0]}", f"BAS(#VEL_PTP, {PTP_PERCENT})", "PTP XHOME"]
+    limit = (job.options.max_lines or MAX_LINES) - 10
+
+    def part(index, body):
+        part_name = common.part_name(name, index)
+        note = f";WorkCal part {index} of program {name}, result sha256 {common.fingerprint(job)}"
+        return common.part_path(job, index), [_module(part_name, [note], body)]
+
+    def main(count):
+        calls = [f"{common.part_name(name, i)}( )" for i in range(1, count + 1)]
+        return _module(name, head, setup + calls + ["PTP XHOME"])
+
+    yield from common.program_files(job, _moves(path), limit, lambda body: _module(
+        name, head, setup + body + ["PTP XHOME"]), part, main)

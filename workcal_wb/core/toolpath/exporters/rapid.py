@@ -1,42 +1,107 @@
-"""ABB RAPID (.mod): MoveL to robtargets in workpiece coordinates, through a wobjdata whose uframe is W."""
+"""ABB RAPID (.mod): a module that loads beside the controller's own main module.
+
+``MODULE MOD_name`` with the header as ! comments, the data it uses declared in it (a tooldata per
+CAM tool, the work object whose uframe is W, zone and speeds), and ``PROC name()`` (never ``main``,
+which the controller's own module has): a check that the tool is not still the flange, ConfJ/ConfL
+off, a MoveJ to the first point, MoveL to robtargets in workpiece coordinates, the CAM file's events
+(TPWrite and Stop, WaitTime, the next tool).  Over ``MAX_LINES`` lines the moves go into part modules
+``name_001.mod`` (``PROC name_001``) that ``name`` calls in order.
+"""
 from __future__ import annotations
 
 from ..orientation import quaternion_wxyz
-from ..safety import number
+from ..safety import numbers
 from . import common
 
 NAME, EXTENSION = "ABB RAPID", ".mod"
-WOBJ, ZONE, TOOL = "wobjWorkCal", "zWorkCal", "tSpindle"
+MACHINES = ("robot",)
+MAX_NAME = 24  # RAPID identifiers: at most 32 characters, "MOD_" + name + "_001"
+MAX_LINES = 5000  # lines per module, as RoboDK's ABB post splits programs
+MAX_SPEED_MM_S = 7000.0  # speeddata v_tcp limit
+MAX_STRING = 80  # RAPID strings (TPWrite)
+COMMENT_WIDTH = 78
+WOBJ, ZONE = "wobjWorkCal", "zWorkCal"
 _NO_EXTERNAL_AXES = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+RESERVED = {"MAIN", "MODULE", "PROC", "ENDPROC", "ENDMODULE", "IF", "FOR", "WHILE", "TEST", "RETURN", "EXIT"}
 
 
-def pose(T) -> str:
-    """[[x, y, z], [q1, q2, q3, q4]] in mm and a unit quaternion (w, x, y, z)."""
-    return (f"[[{','.join(number(v, 4) for v in T[:3, 3])}],"
-            f"[{','.join(number(v, 7) for v in quaternion_wxyz(T))}]]")
+def tool_name(number: int) -> str:
+    return f"tWorkCal{number}"
 
 
-def render(job: common.ExportJob) -> str:
-    name = common.program_name(job, max_len=32)
+def poses_text(rotation, position) -> list[str]:
+    """[[x, y, z], [q1, q2, q3, q4]] in mm and a unit quaternion (w, x, y, z), for stacks."""
+    xyz, q = numbers(position, 4), numbers(quaternion_wxyz(rotation), 7)
+    return [f"[[{','.join(xyz[3 * i:3 * i + 3])}],[{','.join(q[4 * i:4 * i + 4])}]]" for i in range(len(xyz) // 3)]
+
+
+def _string(text: str) -> str:
+    return '"' + text.replace('"', "'").replace("\\", "/")[:MAX_STRING] + '"'
+
+
+def _moves(path, speed_names: dict, first_tool: int):
+    """The body, one group of lines per target."""
+    targets = poses_text(path.rotation, path.position)
+    tools = common.tools_by_move(path, first_tool)
+
+    def move(i, stops):
+        kind, zone = ("MoveJ", "fine") if i == 0 else ("MoveL", "fine" if stops(i) else ZONE)
+        return [f"    {kind} [{targets[i][1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
+                f"{zone}, {tool_name(tools[i])}\\WObj:={WOBJ};"]
+
+    return common.move_groups(path, _event_lines, lambda c: f"    ! {c}", move)
+
+
+def _event_lines(event) -> list[str]:
+    act = common.action(event)
+    lines = [f"    ! {act.message}"]
+    if act.dwell_s is not None:
+        lines.append(f"    WaitTime {numbers([act.dwell_s], 3)[0]};")
+    if act.stop:
+        lines += [f"    TPWrite {_string('WorkCal: ' + act.message)};", "    Stop;"]
+    return lines
+
+
+def _module(name: str, head: list[str], data: list[str], body: list[str]) -> str:
+    return "\n".join([f"MODULE MOD_{name}", *head, *data, f"  PROC {name}()", *body, "  ENDPROC", "ENDMODULE"]) + "\n"
+
+
+def render(job: common.ExportJob):
+    """The main module (and its part modules, when over the line limit)."""
+    name = common.program_name(job, MAX_NAME, reserved=RESERVED)
+    path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
+    tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
+    first_tool = common.first_tool(path)
+    speed_names = {f: f"vWorkCal{i}" for i, f in enumerate(dict.fromkeys(path.feed.tolist()), start=1)}
     notes = ["units: mm, speeds (speeddata v_tcp) in mm/s",
              "angles: orientation quaternions q1..q4 = w, x, y, z (ABB order, unit length)",
-             f"positions: workpiece frame X, in work object {WOBJ}: "
-             f"uframe = {common.placement_name(job)}, oframe identity",
-             f"tool: {TOOL} must be declared on the controller: the spindle's TCP, its Z along the tool into the part",
-             "configuration: ConfL\\Off, robtargets carry cf 0,0,0,0", *common.robot_notes(job)]
-    speeds: dict[float, str] = {}
-    moves = []
-    targets = common.poses(job, in_base_frame=False)
-    for i, target in enumerate(targets):
-        speed = speeds.setdefault(target.feed_mm_min, f"vWorkCal{len(speeds) + 1}")
-        zone = "fine" if i == len(targets) - 1 else ZONE
-        moves += [f"    ! {c}" for c in target.comment.split("\n") if c]
-        moves.append(f"    MoveL [{pose(target.matrix)[1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], "
-                     f"{speed}, {zone}, {TOOL}\\WObj:={WOBJ};")
-    blend = number(common.BLEND_MM, 3)
-    lines = [f"MODULE {name}", *[f"  ! {h}" for h in common.header_lines(job, NAME, notes)],
-             f"  PERS wobjdata {WOBJ} := [FALSE,TRUE,\"\",{pose(job.transform)},[[0,0,0],[1,0,0,0]]];",
+             f"positions: workpiece frame X, in work object {WOBJ}: uframe = {common.placement_name(job)}, "
+             "oframe identity",
+             "configuration: ConfJ\\Off and ConfL\\Off, robtargets carry cf 0,0,0,0 (the robot keeps the "
+             "configuration it starts in)", *common.robot_notes(job, "mm/s (speeddata)"),
+             f"PLACEHOLDERS to fill: {', '.join(tool_name(t) for t in tools)} = the spindle's TCP and load with "
+             "that tool, Z along the tool into the part (the program stops while the TCP is at the flange)"]
+    head = [f"  ! {h}" for h in common.wrapped(common.header_lines(job, NAME, notes), COMMENT_WIDTH)]
+    blend = numbers([common.BLEND_MM], 3)[0]
+    data = [f"  PERS tooldata {tool_name(t)} := [TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];"
+            for t in tools]
+    data += [f"  PERS wobjdata {WOBJ} := [FALSE,TRUE,\"\",{poses_text(job.transform[None, :3, :3], job.transform[None, :3, 3])[0]},"
+             "[[0,0,0],[1,0,0,0]]];",
              f"  CONST zonedata {ZONE} := [FALSE,{blend},{blend},{blend},0.01,{blend},0.01];",
-             *[f"  CONST speeddata {v} := [{number(f / 60.0, 3)},500,5000,1000];" for f, v in speeds.items()],
-             "  PROC main()", "    ConfL\\Off;", *moves, "  ENDPROC", "ENDMODULE"]
-    return "\n".join(lines) + "\n"
+             *[f"  CONST speeddata {v} := [{numbers([f / 60.0], 3)[0]},500,5000,1000];" for f, v in speed_names.items()]]
+    t = tool_name(first_tool)
+    setup = [f"    IF {t}.tframe.trans.x = 0 AND {t}.tframe.trans.y = 0 AND {t}.tframe.trans.z = 0 THEN",
+             f"      TPWrite {_string(f'WorkCal: set {t} to the spindle TCP, then restart')};", "      EXIT;",
+             "    ENDIF", "    ConfJ\\Off;", "    ConfL\\Off;"]
+    limit = (job.options.max_lines or MAX_LINES) - 10
+
+    def part(index, body):
+        part_name = common.part_name(name, index)
+        note = [f"  ! WorkCal part {index} of program {name}, result sha256 {common.fingerprint(job)}"]
+        return common.part_path(job, index), [_module(part_name, note, [], body)]
+
+    def main(count):
+        return _module(name, head, data, setup + [f"    {common.part_name(name, i)};" for i in range(1, count + 1)])
+
+    yield from common.program_files(job, _moves(path, speed_names, first_tool), limit,
+                                    lambda body: _module(name, head, data, setup + body), part, main)
