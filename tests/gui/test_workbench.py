@@ -13,6 +13,7 @@ import FreeCADGui  # noqa: E402
 import workcal_wb  # noqa: E402
 from workcal_wb.gui import commands  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets  # noqa: E402
+from workcal_wb.gui.view import without_animation  # noqa: E402
 
 TREE_ICONS = ("WorkCal_Scan", "WorkCal_Calibration", "WorkCal_Setup")
 
@@ -140,8 +141,14 @@ def test_screenshots_of_the_main_window_and_the_3d_view(doc, shoot, output_dir, 
     obj = make_scan(doc, Cloud(points), name="smoke scan")
     set_regions(obj, workpiece=np.flatnonzero(u < -0.3), reference=np.flatnonzero(u > 0.6))
     doc.recompute()
-    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    with without_animation(view):  # FreeCAD 1.x would still be turning when the picture is taken
+        view.viewIsometric()
+    isometric = tuple(view.getViewDirection())
     view_path = shoot("view3d", fit=True)
+    pump(0.5)
+    assert np.allclose(tuple(view.getViewDirection()), isometric, atol=1e-6), "the view kept turning"
+    assert np.allclose(np.abs(isometric), 3 ** -0.5, atol=1e-3), "not an isometric view"
     window = FreeCADGui.getMainWindow()
     pump(0.2)
     window_path = output_dir / "main_window.png"
