@@ -86,7 +86,7 @@ def render(job: common.ExportJob):
     first = tcp_name(first_tool)
     lines += [f"  if norm({first}) == 0:",
               f"    popup(\"WorkCal: set {first} to the spindle TCP, then restart\", \"WorkCal\", False, True, "
-              "blocking=True)", "    halt()", "  end", f"  set_tcp({first})"]
+              "blocking=True)", "    halt", "  end", f"  set_tcp({first})"]
     targets = poses_text(path.rotation, path.position)
     radii = numbers(blend_radii_m(path.position, [i - 1 for i in events if 0 < i <= len(path)] + [len(path) - 1]), 5)
     speeds = numbers(path.feed / 60000.0, 6)
