@@ -305,3 +305,13 @@ def test_gcode_length_offset_comes_with_a_z_move(text, machine, rotary, tmp_path
     blocks = [re.sub(r"\([^()]*\)", "", line) for line in program.splitlines()]
     offsets = [block for block in blocks if re.search(r"G43(\.4)? ", block)]
     assert len(offsets) == 1 and re.search(r" Z-?\d", offsets[0]) and re.search(r" H\d", offsets[0]), offsets
+
+
+@pytest.mark.parametrize("name", ["while.src", "trap.mod", "sleep.script", "halt.script"])
+def test_a_program_name_that_is_a_word_of_the_language_is_refused(name, tmp_path):
+    """KRL keywords (krl.g4), RAPID reserved words (ABB's table), URScript keywords and the functions the
+    program calls: a program named after one cannot be loaded (or calls itself instead of sleep)."""
+    fmt = {".src": "krl", ".mod": "rapid", ".script": "urscript"}[Path(name).suffix]
+    with pytest.raises(InputError, match="reserved word"):
+        export(parse_gcode("G0 X0 Y0 Z5\nG1 X1 F100\n", "p.nc"), calibration(), fmt, tmp_path / name)
+    assert list(tmp_path.iterdir()) == []

@@ -24,6 +24,11 @@ MAX_SPEED_MM_S = 1500.0  # tool speed limit of the default safety configuration
 BLEND_SHARE = 0.4  # a blend radius covers at most this share of the shorter neighbouring segment
 COMMENT_WIDTH = 76
 MAX_NAME = 63
+# URScript's keywords (Script Manual) and the functions and variables this program uses: a program named
+# sleep would call itself
+RESERVED = {w.upper() for w in """def end if elif else while return halt pause break continue sec thread run join kill
+    global local True False None and or xor not enter_critical exit_critical movej movel popup sleep set_tcp
+    pose_trans norm workcal_base""".split()}
 
 
 def poses_text(rotation, position) -> list[str]:
@@ -64,7 +69,7 @@ def blend_radii_m(position: np.ndarray, stops) -> np.ndarray:
 
 
 def render(job: common.ExportJob):
-    name = common.program_name(job, MAX_NAME)
+    name = common.program_name(job, MAX_NAME, reserved=RESERVED)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
     first_tool = common.first_tool(path)
