@@ -82,6 +82,8 @@ def render(job: common.ExportJob):
              f"{BLEND_SHARE:g} of a segment; none where the robot stops",
              *common.robot_notes(job, "m/s"),
              "program size: not split (URScript sets no line limit WorkCal knows of)",
+             f"to run: send the file as it is to the controller's primary/secondary interface (port 30001/30002), "
+             f"or in PolyScope insert it with a Script node (File) followed by a Script line {name}()",
              f"PLACEHOLDERS to fill: {', '.join(tcp_name(t) for t in tools)} = the spindle's TCP with that tool "
              "(metres, rotation vector), Z along the tool into the part (the program halts while it is zero)"]
     lines = [f"def {name}():"]
