@@ -78,10 +78,10 @@ def _notes(job: common.ExportJob) -> list[str]:
     return notes
 
 
-def _length_offsets(path, machine: str) -> dict:
-    """{move index: (G43 or G43.4, H word)}: each G43 H of the CAM file (and G43 H1, or H of the first
-    tool, when it has none) in the first move from there on whose block gives Z; a G49 drops the ones
-    not yet written."""
+def _length_offsets(path, machine: str, add_missing: bool = True) -> dict:
+    """{move index: (G43 or G43.4, H word)}: each G43 H of the CAM file (and, ``add_missing``, G43 H1 or
+    H of the first tool when it has none) in the first move from there on whose block gives Z; a G49
+    drops the ones not yet written."""
     code = TCP_ON if machine == "5axis-tcp" else "G43"
 
     def z_move(i: int):
@@ -90,7 +90,7 @@ def _length_offsets(path, machine: str) -> dict:
         return i if i < len(path) else None
 
     offsets = [e for e in path.events if e.kind == LENGTH_OFFSET]
-    if not offsets:
+    if not offsets and add_missing:
         tools = [e.number for e in path.events if e.before == 0 and e.kind == TOOL_CHANGE]
         first = z_move(0)
         return {} if first is None else {first: (code, f"H{int(tools[-1]) if tools else 1}")}
@@ -106,7 +106,7 @@ def _length_offsets(path, machine: str) -> dict:
 def render(job: common.ExportJob) -> list:
     path = transformed(job.toolpath, job.transform, job.chord_tol_mm)
     header = [comment(h) for h in common.wrapped(common.header_lines(job, NAME, _notes(job)), COMMENT_WIDTH)]
-    return [(job.out, _chunks(path, header, job.machine, job.options.rotary))]
+    return [(job.out, _chunks(path, header, job.machine, job.options.rotary, _length_offsets(path, job.machine)))]
 
 
 def format_gcode(toolpath, header=()) -> str:
@@ -114,7 +114,8 @@ def format_gcode(toolpath, header=()) -> str:
     3-axis when every tool axis is +Z, 5-axis A/B otherwise."""
     vertical = toolpath.tool_axis is None or np.allclose(toolpath.tool_axis, orientation.VERTICAL, atol=1e-12)
     lines = [comment(h) for h in list(header) + toolpath.header]
-    return "".join(_chunks(toolpath, lines, "3axis" if vertical else "5axis-tcp", "ab"))
+    machine = "3axis" if vertical else "5axis-tcp"
+    return "".join(_chunks(toolpath, lines, machine, "ab", _length_offsets(toolpath, machine, add_missing=False)))
 
 
 def _feed_words(feed: np.ndarray) -> np.ndarray:
@@ -129,14 +130,13 @@ def _feed_words(feed: np.ndarray) -> np.ndarray:
     return words
 
 
-def _chunks(path, header: list[str], machine: str, rotary_name: str):
+def _chunks(path, header: list[str], machine: str, rotary_name: str, offsets: dict):
     """The program text, CHUNK_MOVES moves at a time: plain moves formatted in bulk, the others
     (arcs, events, comments, partial moves) one by one."""
     five_axis = machine == "5axis-tcp"
     rotary = orientation.ROTARY[rotary_name].letters
     angles = orientation.rotary_from_tool_axes(rotary_name, path.axes()) if five_axis else None
     events = common.events_by_move(path.events, len(path))
-    offsets = _length_offsets(path, machine)
     special = path.arc_mask.copy()
     special[[i for i in set(events) | set(path.comments) | set(path.partial) | set(offsets) if i < len(path)]] = True
     special[:1] = True
