@@ -1,15 +1,18 @@
 """Strict checkers of the documented rules of each controller language, kept small, for the tests.
 
-Each ``check_*`` raises AssertionError naming the line and the rule a program breaks.  They follow:
+Each ``check_*`` raises AssertionError naming the line and the rule a program breaks.  Every program is
+plain ASCII (UR's script interface takes only ASCII text, Fanuc TP and CNC posts write ASCII).  They follow:
 KRL: the krl.g4 grammar's module structure (``&`` header lines, then DEF on the first line, EXT
 declarations before statements, END), names of at most 24 characters, statements of the forms
 WorkCal writes; RAPID: MODULE/ENDMODULE, declarations before routines, no PROC main, every used
 tool/work object/speed/zone declared, identifiers of at most 32 characters, strings of at most 80;
-URScript: ``def`` in the first column on the first line, every line up to ``end`` indented; Fanuc
+URScript: ``def`` in the first column on the first line, every line up to ``end`` indented, ``halt``
+a keyword (no ``halt()``); Fanuc
 LS: /PROG /ATTR /MN /POS /END, ``NNNN:`` lines with the motion letter right after the colon,
 remarks of at most 32 characters, every P[] used defined, LINE_COUNT true, at most 9999 lines;
 G-code: one word grammar (letter + number), comments without ``(`` ``;`` ``%`` inside, ``%`` only
-as the first and last line, at most one code of each modal group per block.
+as the first and last line, at most one code of each modal group per block, G43/G43.4 H only in a block
+that moves Z (on Fanuc-family controls the offset itself moves Z).
 """
 import re
 
@@ -21,7 +24,13 @@ KRL_STATEMENTS = [rf"BAS\(#\w+, {NUMBER}\)", rf"\$BASE = \$ROBROOT(?::{AGGREGATE
                   rf"WAIT SEC {NUMBER}", r"IF .* THEN", "ENDIF", rf"{IDENT}\( \)"]
 
 
+def check_ascii(text: str) -> None:
+    bad = next((number for number, line in enumerate(text.split("\n"), start=1) if not line.isascii()), None)
+    assert bad is None, f"line {bad}: not ASCII"
+
+
 def check_krl(text: str, name: str) -> None:
+    check_ascii(text)
     lines = text.split("\n")
     assert lines[-1] == "", "the file ends with a newline"
     body = [line for line in lines[:-1] if not line.startswith("&")]
@@ -43,6 +52,7 @@ def check_krl(text: str, name: str) -> None:
 
 def check_rapid(text: str, known=()) -> None:
     """``known``: data declared in another module of the program (the main module of parts)."""
+    check_ascii(text)
     lines = text.rstrip("\n").split("\n")
     assert re.fullmatch(rf"MODULE ({IDENT})", lines[0]) and lines[-1] == "ENDMODULE", "MODULE ... ENDMODULE"
     declared, in_proc = set(known), False
@@ -68,14 +78,17 @@ def check_rapid(text: str, known=()) -> None:
 
 
 def check_urscript(text: str) -> None:
+    check_ascii(text)
     lines = text.rstrip("\n").split("\n")
     assert re.fullmatch(rf"def {IDENT}\(\):", lines[0]), "line 1 must be def name(): in the first column"
     assert lines[-1] == "end", "the last line is end"
     for number, line in enumerate(lines[1:-1], start=2):
         assert line.startswith("  "), f"line {number}: not indented: {line!r}"
+        assert not re.match(r"\s*halt\s*\(", line), f"line {number}: halt is a keyword, not a function"
 
 
 def check_fanuc(text: str, name: str) -> None:
+    check_ascii(text)
     lines = text.rstrip("\n").split("\n")
     assert lines[0] == f"/PROG  {name}" and lines[1] == "/ATTR" and lines[-1] == "/END"
     for entry in ("OWNER", "COMMENT", "PROG_SIZE", "CREATE", "MODIFIED", "FILE_NAME", "VERSION", "LINE_COUNT",
@@ -98,6 +111,7 @@ G_GROUPS = [{0, 1, 2, 3}, {17, 18, 19}, {90, 91}, {20, 21}, {43, 43.4, 49}, {4, 
 
 
 def check_gcode(text: str) -> None:
+    check_ascii(text)
     lines = text.rstrip("\n").split("\n")
     assert lines[0] == "%" and lines[-1] == "%" and "%" not in "".join(lines[1:-1]), "% only around the program"
     for number, line in enumerate(lines[1:-1], start=2):
@@ -109,6 +123,8 @@ def check_gcode(text: str) -> None:
         codes = [float(v) for v in re.findall(rf"G({NUMBER})", code)]
         for group in G_GROUPS:
             assert len([c for c in codes if c in group]) <= 1, f"line {number}: two codes of one modal group"
+        if {43, 43.4} & set(codes):
+            assert re.search(rf"Z{NUMBER}", code), f"line {number}: G43 without a Z move"
 
 
 def comment_text(text: str) -> str:

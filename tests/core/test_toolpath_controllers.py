@@ -54,11 +54,14 @@ def test_corpus_exports_pass_the_checkers_and_parse_back(name, fmt, tmp_path):
         np.testing.assert_allclose(linearised(again).points(), frames.apply(W, linearised(path).points()), atol=1e-3)
         if five_axis:
             np.testing.assert_allclose(again.axes(), path.axes() @ W[:3, :3].T, atol=1e-6)
-        kinds = [e.kind for e in again.events]
-        offsets = [e for e in path.events if e.kind == "length_offset"]
-        if kinds[-1:] == ["length_offset"] and again.events[-1].number is None and offsets[-1].number is not None:
-            kinds.pop()  # the export cancels tool-length compensation at the end when the CAM file did not
-        assert kinds == [e.kind for e in path.events]
+        # G43 H moves into the block of the next Z move, so it may come after that move's other events
+        offsets = [e.number for e in path.events if e.kind == "length_offset"]
+        again_offsets = [e.number for e in again.events if e.kind == "length_offset"]
+        if again_offsets[-1:] == [None] and offsets[-1] is not None:
+            again_offsets.pop()  # the export cancels tool-length compensation at the end when the CAM file did not
+        assert again_offsets == offsets
+        assert [e.kind for e in again.events if e.kind != "length_offset"] == \
+            [e.kind for e in path.events if e.kind != "length_offset"]
         return
     poses = PARSERS[fmt](text)
     expected = frames.apply(W, linearised(path).points())
@@ -162,7 +165,7 @@ def test_gcode_3axis_refuses_a_tilted_w_with_the_tilt_and_keeps_arcs_when_level(
     export(path, calibration(tilted), "gcode", tmp_path / "p.nc", vertical_tol_deg=0.25)
     text = (tmp_path / "p.nc").read_text()
     check_gcode(text)
-    assert " A" not in text.split("G21 G90")[1] and "G43 H1" in text
+    assert " A" not in text.split("G21 G90")[1] and re.search(r"\nG0 G43 X\S+ Y\S+ Z\S+ H1\n", text)
     export(path, calibration(TURNED), "gcode", tmp_path / "q.nc")
     assert "\nG3 " in (tmp_path / "q.nc").read_text()
 
@@ -172,7 +175,8 @@ def test_gcode_5axis_states_its_kinematics_and_tcp(tmp_path):
     out = tmp_path / "p.nc"
     export(path, calibration(TILTED), "gcode", out, machine="5axis-tcp", rotary="ac")
     text = comment_text(out.read_text()) + out.read_text()
-    assert "tool-centre-point control G43.4" in text and "Rz[C] Rx[A]" in text and "G43.4 H3" in text
+    assert "tool-centre-point control G43.4" in text and "Rz[C] Rx[A]" in text
+    assert re.search(r"\nG\d G43\.4 X\S+ Y\S+ Z\S+ H3 A", text)
     with pytest.raises(InputError, match="not --machine robot"):
         export(path, calibration(TILTED), "gcode", out, machine="robot")
 
@@ -262,3 +266,52 @@ def test_every_program_names_its_result_and_shows_the_bound(tmp_path):
         export(path, CalibrationResult.from_json(tmp_path / "result.json"), fmt, tmp_path / f"p{ext}")
         text = comment_text((tmp_path / f"p{ext}").read_text())
         assert f"result sha256 {digest}" in text and "bound 0.0275 mm, median 0.011 mm" in text, fmt
+
+
+@pytest.mark.parametrize("fmt", sorted(EXT))
+def test_every_program_is_plain_ascii(fmt, tmp_path):
+    """UR's script interface takes only (extended) ASCII, Fanuc TP and CNC posts write ASCII: the CAM file's
+    own words (tool descriptions with Ø and °, names with umlauts) reach the program as ASCII."""
+    path = parse_gcode("(Ø6 end mill, 90° chamfer, Müller)\nG0 X0 Y0 Z5\nG1 X1 F100 (naïve pass)\n", "p.nc")
+    out = tmp_path / f"p{EXT[fmt]}"
+    export(path, calibration(), fmt, out)
+    data = out.read_bytes()
+    assert max(data) < 128, fmt
+    check(fmt, data.decode("ascii"), "p")
+    assert "Muller" in comment_text(data.decode("ascii")), fmt
+
+
+def test_urscript_stops_with_the_halt_keyword(tmp_path):
+    """The Script Manual lists halt as a keyword (like return), not a function: no halt()."""
+    out = tmp_path / "p.script"
+    export(parse_gcode("G0 X0 Y0 Z5\nG1 X1 F100\n", "p.nc"), calibration(), "urscript", out)
+    text = out.read_text()
+    check_urscript(text)
+    assert "    halt" in text.splitlines()
+
+
+@pytest.mark.parametrize("text, machine, rotary", [
+    ("G0 X0 Y0 Z5\nG1 X1 F100\n", "3axis", "ab"),  # no G43 in the file: WorkCal adds one
+    ("G43 H2\nG0 X0 Y0\nG0 Z5\nG1 X1 F100\n", "3axis", "ab"),  # LinuxCNC style: G43 alone, Z later
+    ("G0 X0 Y0 Z5 A0 C0\nG1 X1 A10 C30 F100\n", "5axis-tcp", "ac"),
+])
+def test_gcode_length_offset_comes_with_a_z_move(text, machine, rotary, tmp_path):
+    """G43 H / G43.4 H moves Z on Fanuc-family controls: posts write it with the first Z move (G43 Z15. H1),
+    never alone, where it would lift the spindle by the tool length from wherever it is."""
+    out = tmp_path / "p.nc"
+    export(parse_gcode(text, "p.nc", rotary=rotary), calibration(), "gcode", out, machine=machine, rotary=rotary)
+    program = out.read_text()
+    check_gcode(program)
+    blocks = [re.sub(r"\([^()]*\)", "", line) for line in program.splitlines()]
+    offsets = [block for block in blocks if re.search(r"G43(\.4)? ", block)]
+    assert len(offsets) == 1 and re.search(r" Z-?\d", offsets[0]) and re.search(r" H\d", offsets[0]), offsets
+
+
+@pytest.mark.parametrize("name", ["while.src", "trap.mod", "sleep.script", "halt.script"])
+def test_a_program_name_that_is_a_word_of_the_language_is_refused(name, tmp_path):
+    """KRL keywords (krl.g4), RAPID reserved words (ABB's table), URScript keywords and the functions the
+    program calls: a program named after one cannot be loaded (or calls itself instead of sleep)."""
+    fmt = {".src": "krl", ".mod": "rapid", ".script": "urscript"}[Path(name).suffix]
+    with pytest.raises(InputError, match="reserved word"):
+        export(parse_gcode("G0 X0 Y0 Z5\nG1 X1 F100\n", "p.nc"), calibration(), fmt, tmp_path / name)
+    assert list(tmp_path.iterdir()) == []

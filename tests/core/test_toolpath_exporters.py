@@ -191,7 +191,7 @@ def test_gcode_keeps_arcs_when_w_keeps_their_plane(path, tmp_path):
     export(flat, calibration(matrix=turned), "gcode", out)
     text = out.read_text()
     assert re.search(r"^G3 ", text, flags=re.M) and " A" not in text.split("G21 G90 G17")[1]
-    assert "G43 H1" in text
+    assert re.search(r"^G0 G43 X\S+ Y\S+ Z\S+ H1$", text, flags=re.M)  # with the first Z move
     again = read_gcode(out)
     np.testing.assert_allclose(linearised(again, 0.01).points(), expected(flat, turned)[0], atol=TOL_MM)
 

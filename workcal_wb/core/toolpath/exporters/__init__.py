@@ -3,7 +3,8 @@
 ``render(job)`` yields the files of the program, ``(path, chunks)``: for a program over the controller's
 size limit its numbered parts first, then the main program at ``job.out``.
 ``export`` is the only way a program reaches the disk: checks first (calibration gates, sanity bound,
-finite numbers, work envelope in B, the machine's axes), then each file is written atomically, parts
+finite numbers, work envelope in B, the machine's axes), then each file is written atomically in plain
+ASCII (``common.ascii_text``), parts
 first and the main program last; a failure removes what this export wrote, and parts left by an
 earlier, longer export of the same program are removed.
 """
@@ -59,7 +60,7 @@ def export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, out, op
         for path, chunks in files:  # parts first, the main program last
             with atomic_open(path) as fh:
                 for chunk in chunks:
-                    fh.write(chunk)
+                    fh.write(common.ascii_text(chunk))
             written.append(Path(path))
     except BaseException:
         for path in written:

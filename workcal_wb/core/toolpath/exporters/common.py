@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import re
 import textwrap
+import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -270,6 +271,21 @@ def action(event: Event) -> Action:
     if event.kind == DWELL:
         return Action(f"dwell (G4) {n:g} s", False, dwell_s=float(n))
     return Action(f"machine move {event.code}: retract to the program's top Z", False)
+
+
+def ascii_text(text: str) -> str:
+    """``text`` in plain ASCII, one character for one: a letter's base letter (é -> e), else '?'.
+
+    Controllers read ASCII (UR's script interface takes only ASCII text; Fanuc TP and CNC posts write
+    ASCII), and the CAM file's own words reach the program in comments and messages."""
+    if text.isascii():
+        return text
+    return "".join(c if c.isascii() else _ascii_char(c) for c in text)
+
+
+def _ascii_char(c: str) -> str:
+    base = unicodedata.normalize("NFKD", c).encode("ascii", "ignore").decode()
+    return base if len(base) == 1 else "?"
 
 
 # ---- parts and names ---------------------------------------------------------------------------

@@ -2,10 +2,12 @@
 
 Structure: ``%``, comment lines, a safe-start block (mm, absolute, XY plane, no compensation or
 cycle, feed per minute), the CAM file's own events (tool change, spindle, coolant, dwell, stops,
-G28/G53) where it had them, tool-length compensation before the first move (``G43 H`` on a 3-axis
-machine, ``G43.4 H`` tool-centre-point control on a 5-axis one, so XYZ is the tool tip), every move
-with its motion code and full position (a move made after G28/G53 only with the axes its block gave,
-3-axis), ``G49``, ``M30``, ``%``.  Comments never hold ``(``, ``)``, ``;`` or ``%``.
+G28/G53) where it had them, tool-length compensation (``G43 H`` on a 3-axis machine, ``G43.4 H``
+tool-centre-point control on a 5-axis one, so XYZ is the tool tip) in the block of the first move
+that gives Z after the CAM file's G43 (or after the start when it has none: the offset itself moves
+Z on Fanuc-family controls, so it never stands alone), every move with its motion code and full
+position (a move made after G28/G53 only with the axes its block gave, 3-axis), ``G49``, ``M30``,
+``%``.  Comments never hold ``(``, ``)``, ``;`` or ``%``.
 
 The text is produced in chunks of moves, so a 2-million-move program is never one string in memory.
 """
@@ -41,7 +43,7 @@ def _event_blocks(event, machine: str) -> list[str]:
     if event.kind == TOOL_CHANGE:
         return [f"T{n} M6"]
     if event.kind == LENGTH_OFFSET:
-        return ["G49"] if n is None else [f"{TCP_ON if machine == '5axis-tcp' else 'G43'} H{n}"]
+        return ["G49"] if n is None else []  # G43 H goes into a Z move: _length_offsets
     if event.kind == SPINDLE:
         code = {"cw": "M3", "ccw": "M4", "off": "M5"}[event.code]
         return [code if n is None or code == "M5" else f"S{n:g} {code}"]
@@ -64,7 +66,7 @@ def _notes(job: common.ExportJob) -> list[str]:
         tilt = check_vertical(job.toolpath, job.transform, job.options.vertical_tol_deg)
         notes += [f"3-axis: the tool stays along the machine's Z; W tilts the tool axis {tilt:.4f} deg, within the "
                   f"tolerance {job.options.vertical_tol_deg:g} deg",
-                  "tool length: G43 H before the first move (H of the tool in use, H1 when the file names none)",
+                  "tool length: G43 H with the first Z move (H of the tool in use, H1 when the file names none)",
                   "after G28/G53 a move carries only the axes its block gave"]
     else:
         rotary = orientation.ROTARY[job.options.rotary]
@@ -76,20 +78,35 @@ def _notes(job: common.ExportJob) -> list[str]:
     return notes
 
 
-def _first_offset(job: common.ExportJob) -> list[str]:
-    """Length compensation before the first move when the CAM file has none at all."""
-    if any(e.kind == LENGTH_OFFSET for e in job.toolpath.events):
-        return []
-    before_first = [e for e in job.toolpath.events if e.before == 0]
-    tools = [e.number for e in before_first if e.kind == TOOL_CHANGE]
-    h = int(tools[-1]) if tools else 1
-    return [f"{TCP_ON if job.machine == '5axis-tcp' else 'G43'} H{h} {comment('tool length: XYZ is the tool tip')}"]
+def _length_offsets(path, machine: str, add_missing: bool = True) -> dict:
+    """{move index: (G43 or G43.4, H word)}: each G43 H of the CAM file (and, ``add_missing``, G43 H1 or
+    H of the first tool when it has none) in the first move from there on whose block gives Z; a G49
+    drops the ones not yet written."""
+    code = TCP_ON if machine == "5axis-tcp" else "G43"
+
+    def z_move(i: int):
+        while machine == "3axis" and i < len(path) and "Z" not in path.partial.get(i, "Z"):
+            i += 1
+        return i if i < len(path) else None
+
+    offsets = [e for e in path.events if e.kind == LENGTH_OFFSET]
+    if not offsets and add_missing:
+        tools = [e.number for e in path.events if e.before == 0 and e.kind == TOOL_CHANGE]
+        first = z_move(0)
+        return {} if first is None else {first: (code, f"H{int(tools[-1]) if tools else 1}")}
+    out = {}
+    for e in offsets:
+        if e.number is None:
+            out = {i: words for i, words in out.items() if i < e.before}
+        elif (i := z_move(e.before)) is not None:
+            out[i] = (code, f"H{e.number}")
+    return out
 
 
 def render(job: common.ExportJob) -> list:
     path = transformed(job.toolpath, job.transform, job.chord_tol_mm)
     header = [comment(h) for h in common.wrapped(common.header_lines(job, NAME, _notes(job)), COMMENT_WIDTH)]
-    return [(job.out, _chunks(path, header, job.machine, job.options.rotary, _first_offset(job)))]
+    return [(job.out, _chunks(path, header, job.machine, job.options.rotary, _length_offsets(path, job.machine)))]
 
 
 def format_gcode(toolpath, header=()) -> str:
@@ -97,7 +114,8 @@ def format_gcode(toolpath, header=()) -> str:
     3-axis when every tool axis is +Z, 5-axis A/B otherwise."""
     vertical = toolpath.tool_axis is None or np.allclose(toolpath.tool_axis, orientation.VERTICAL, atol=1e-12)
     lines = [comment(h) for h in list(header) + toolpath.header]
-    return "".join(_chunks(toolpath, lines, "3axis" if vertical else "5axis-tcp", "ab", []))
+    machine = "3axis" if vertical else "5axis-tcp"
+    return "".join(_chunks(toolpath, lines, machine, "ab", _length_offsets(toolpath, machine, add_missing=False)))
 
 
 def _feed_words(feed: np.ndarray) -> np.ndarray:
@@ -112,7 +130,7 @@ def _feed_words(feed: np.ndarray) -> np.ndarray:
     return words
 
 
-def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offset: list[str]):
+def _chunks(path, header: list[str], machine: str, rotary_name: str, offsets: dict):
     """The program text, CHUNK_MOVES moves at a time: plain moves formatted in bulk, the others
     (arcs, events, comments, partial moves) one by one."""
     five_axis = machine == "5axis-tcp"
@@ -120,7 +138,7 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offse
     angles = orientation.rotary_from_tool_axes(rotary_name, path.axes()) if five_axis else None
     events = common.events_by_move(path.events, len(path))
     special = path.arc_mask.copy()
-    special[[i for i in set(events) | set(path.comments) | set(path.partial) if i < len(path)]] = True
+    special[[i for i in set(events) | set(path.comments) | set(path.partial) | set(offsets) if i < len(path)]] = True
     special[:1] = True
     arc_rows = np.cumsum(path.arc_mask) - 1
     starts = path.starts()
@@ -139,12 +157,11 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offse
             block = []
             for e in events.get(i, ()):
                 block += _event_blocks(e, machine)
-            if i == 0:
-                block += first_offset
             k, row = int(path.kind[i]), xyz[i - a]
             known = path.partial.get(i, AXES) if not five_axis else AXES
             words = [f"{axis}{row[j]}" for j, axis in enumerate(AXES) if axis in known]
             code = MOTION_CODE[KINDS[k]]
+            g43, h = offsets.get(i, ("", ""))
             if k >= FIRST_ARC_CODE:
                 r = arc_rows[i]
                 normal, centre = path.arc_normal[r], path.arc_centre[r]
@@ -157,7 +174,8 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, first_offse
                 offset = numbers(centre - starts[i], 4)
                 words += [f"{letter}{offset[OFFSET_AXIS[letter]]}" for letter in PLANES[plane][1]]
             notes = [comment(c) for c in path.comments.get(i, "").split("\n") if c]  # on the line: they stay its own
-            block.append(" ".join([code, *words]) + tail[i - a] + feed_words[i] + "".join(" " + n for n in notes))
+            block.append(" ".join(w for w in [code, g43, *words, h] if w) + tail[i - a] + feed_words[i]
+                         + "".join(" " + n for n in notes))
             lines[i - a] = "\n".join(block)
         yield "\n".join(lines) + "\n"
     lines = []

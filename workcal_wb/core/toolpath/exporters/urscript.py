@@ -24,6 +24,11 @@ MAX_SPEED_MM_S = 1500.0  # tool speed limit of the default safety configuration
 BLEND_SHARE = 0.4  # a blend radius covers at most this share of the shorter neighbouring segment
 COMMENT_WIDTH = 76
 MAX_NAME = 63
+# URScript's keywords (Script Manual) and the functions and variables this program uses: a program named
+# sleep would call itself
+RESERVED = {w.upper() for w in """def end if elif else while return halt pause break continue sec thread run join kill
+    global local True False None and or xor not enter_critical exit_critical movej movel popup sleep set_tcp
+    pose_trans norm workcal_base""".split()}
 
 
 def poses_text(rotation, position) -> list[str]:
@@ -64,7 +69,7 @@ def blend_radii_m(position: np.ndarray, stops) -> np.ndarray:
 
 
 def render(job: common.ExportJob):
-    name = common.program_name(job, MAX_NAME)
+    name = common.program_name(job, MAX_NAME, reserved=RESERVED)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
     first_tool = common.first_tool(path)
@@ -77,6 +82,8 @@ def render(job: common.ExportJob):
              f"{BLEND_SHARE:g} of a segment; none where the robot stops",
              *common.robot_notes(job, "m/s"),
              "program size: not split (URScript sets no line limit WorkCal knows of)",
+             f"to run: send the file as it is to the controller's primary/secondary interface (port 30001/30002), "
+             f"or in PolyScope insert it with a Script node (File) followed by a Script line {name}()",
              f"PLACEHOLDERS to fill: {', '.join(tcp_name(t) for t in tools)} = the spindle's TCP with that tool "
              "(metres, rotation vector), Z along the tool into the part (the program halts while it is zero)"]
     lines = [f"def {name}():"]
@@ -86,7 +93,7 @@ def render(job: common.ExportJob):
     first = tcp_name(first_tool)
     lines += [f"  if norm({first}) == 0:",
               f"    popup(\"WorkCal: set {first} to the spindle TCP, then restart\", \"WorkCal\", False, True, "
-              "blocking=True)", "    halt()", "  end", f"  set_tcp({first})"]
+              "blocking=True)", "    halt", "  end", f"  set_tcp({first})"]
     targets = poses_text(path.rotation, path.position)
     radii = numbers(blend_radii_m(path.position, [i - 1 for i in events if 0 < i <= len(path)] + [len(path) - 1]), 5)
     speeds = numbers(path.feed / 60000.0, 6)
