@@ -16,7 +16,7 @@ import numpy as np
 from .errors import InputError
 from .files import read_bytes
 from .geometry import Cloud, checked
-from .units import extent_warning, mm_per_unit
+from .units import extent_warnings, mm_per_unit
 
 # Headers are small; searching further would only scan binary data of a file without one.
 _MAX_HEADER_BYTES = 1 << 20
@@ -35,11 +35,12 @@ class _Parsed(NamedTuple):
     warnings: tuple[str, ...] = ()
 
 
-def read_cloud(path, units: str | None = "mm", name: str | None = None) -> Cloud:
+def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit") -> Cloud:
     """Read a point cloud or mesh file into a checked ``Cloud`` in mm.
 
     ``units`` is the file's length unit; ``None`` uses the ``comment units`` line of a PLY written by
-    WorkCal (mm when there is none).  ``name`` defaults to the file name.
+    WorkCal (mm when there is none).  ``name`` defaults to the file name.  ``unit_option`` is how the
+    caller's user sets the unit (e.g. "--model-units"), named in a warning about a suspect size.
     """
     path = Path(path)
     parse = _PARSERS.get(path.suffix.lower())
@@ -60,12 +61,11 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None) -> Cloud
             scale = mm_per_unit(units)
         except InputError as exc:
             raise InputError(f"{label}: the file declares {exc}") from None
-    cloud = checked(Cloud(parsed.points * scale, parsed.normals, parsed.triangles, path.name,
-                          list(parsed.warnings)))
+    with np.errstate(over="ignore"):  # a value too large in mm becomes inf: refused or dropped by checked
+        points = parsed.points * scale
+    cloud = checked(Cloud(points, parsed.normals, parsed.triangles, path.name, list(parsed.warnings)))
     cloud.name = name or path.name
-    warning = extent_warning(cloud.diagonal(), path.name, units)
-    if warning:
-        cloud.warnings.append(warning)
+    cloud.warnings += extent_warnings(cloud.points, path.name, units, unit_option)
     return cloud
 
 
