@@ -212,7 +212,8 @@ class CalibrationResult:
             self.workpiece = MatchResult.from_dict(self.workpiece, "workpiece match")
         if isinstance(self.reference, dict):
             self.reference = MatchResult.from_dict(self.reference, "reference match")
-        self.regions = {k: np.asarray(v, dtype=np.int64) if k in REGION_ROLES else v for k, v in self.regions.items()}
+        self.regions = {k: np.asarray(v, dtype=np.int64) if k in REGION_ROLES and v is not None else v
+                        for k, v in self.regions.items()}
 
     @property
     def ok(self) -> bool:
@@ -358,17 +359,20 @@ def _read_regions(regions, source: str, folder, scan_points: int | None) -> dict
         del regions["counts"]  # the arrays say it now
     for role in REGION_ROLES:
         if role in regions:
-            regions[role] = _indices(regions[role], f"{source}: {role} region", scan_points, role)
+            regions[role] = _indices(regions[role], source, scan_points, role)
     return regions
 
 
-def _indices(values, where: str, scan_points: int | None, role: str) -> np.ndarray:
-    array = np.asarray(values) if not isinstance(values, np.ndarray) else values
-    if array.ndim != 1 or (len(array) and array.dtype.kind not in "iu"):
-        raise InputError(f"{where}: must be a list of whole point indices")
+def _indices(values, source: str, scan_points: int | None, role: str) -> np.ndarray:
+    try:
+        array = np.asarray(values)
+    except (ValueError, TypeError, OverflowError):  # ragged lists, absurd numbers
+        array = None
+    if array is None or array.ndim != 1 or (len(array) and array.dtype.kind not in "iu"):
+        raise InputError(f"{source}: the {role} region must be a list of whole point indices")
     array = array.astype(np.int64)
     if len(array) and (array.min() < 0 or (scan_points is not None and array.max() >= scan_points)):
-        raise InputError(f"{where}: {role} indices outside the scan's {scan_points} points")
+        raise InputError(f"{source}: {role} indices outside the scan's {scan_points} points")
     return array
 
 
