@@ -14,8 +14,19 @@ def _number(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return _checked(value, math.isfinite(value), "a finite number", text)
+
+
+def _whole(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+
+
+def _checked(value, ok: bool, words: str, text: str):
+    if not ok:
+        raise argparse.ArgumentTypeError(f"must be {words}, got {text!r}")
     return value
 
 
@@ -27,40 +38,25 @@ def finite(text: str) -> float:
 def positive(text: str) -> float:
     """A finite number > 0 (tolerances, sizes, speeds)."""
     value = _number(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a number > 0, got {text!r}")
-    return value
+    return _checked(value, value > 0, "a number > 0", text)
 
 
 def non_negative(text: str) -> float:
     """A finite number >= 0 (noise)."""
     value = _number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text!r}")
-    return value
-
-
-def _whole(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+    return _checked(value, value >= 0, "a number >= 0", text)
 
 
 def seed(text: str) -> int:
     """A random seed: a whole number from 0 to 2**63 - 1 (what numpy's generators take)."""
     value = _whole(text)
-    if not 0 <= value < 2**63:
-        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 2**63 - 1, got {text!r}")
-    return value
+    return _checked(value, 0 <= value < 2**63, "a whole number from 0 to 2**63 - 1", text)
 
 
 def count(text: str) -> int:
     """A whole number >= 1 (runs, positions)."""
     value = _whole(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {text!r}")
-    return value
+    return _checked(value, value >= 1, "at least 1", text)
 
 
 def envelope(text: str):
