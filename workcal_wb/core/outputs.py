@@ -132,18 +132,21 @@ class OutputFolder:
         return manifest
 
     def _remove_previous(self, keep: set) -> None:
-        """The files of an earlier set of this kind that the new set does not replace (and the manifest)."""
+        """The files of an earlier set of this kind (and the manifest), except those named in ``keep``
+        (the new set replaces them) and the run's inputs."""
         for entry in os.listdir(self.path):
             target = self.path / entry
-            if (entry in keep and not target.is_dir()) or not any(fnmatch.fnmatch(entry, p) for p in self.owned):
-                continue
-            if os.path.realpath(target) in self.keep or any(k.startswith(os.path.realpath(target) + os.sep)
-                                                           for k in self.keep):
+            replaced = entry in keep and not target.is_dir()  # os.replace puts the new file in its place
+            if replaced or not any(fnmatch.fnmatch(entry, p) for p in self.owned) or self._holds_input(target):
                 continue
             if target.is_dir() and not target.is_symlink():
                 shutil.rmtree(target)
             else:
                 os.unlink(target)
+
+    def _holds_input(self, target: Path) -> bool:
+        real = os.path.realpath(target)
+        return any(path == real or path.startswith(real + os.sep) for path in self.keep)
 
     def _clear_after_error(self) -> None:
         """After an error nothing of an earlier set may stay to be mistaken for this run's result."""

@@ -226,7 +226,7 @@ def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, toleran
         shown = ", ".join(f"{size:.4g}" for size in sizes[:5])
         return (f"no object on the platform is the size of the model ({surface.diagonal:.4g} mm across; the objects "
                 f"are {shown} mm across): is the model in the unit it was read in?")
-    return ("no object of its size matches the model; is it in view, and is its model the right one?")
+    return "no object of its size matches the model; is it in view, and is its model the right one?"
 
 
 @dataclass
