@@ -59,6 +59,14 @@ def test_ply_trailing_data_after_an_element_that_is_not_read_is_refused(tmp_path
         read_cloud(write(tmp_path, "grid.ply", data + extra))
 
 
+def test_ply_declaring_an_element_twice_is_refused(tmp_path):
+    """Found by the fuzz test: a second face element was read as the first one's (a KeyError)."""
+    data = ply_bytes("binary_little_endian", [("vertex", XYZ, POINTS), ("face", FACES, [(t,) for t in TRIANGLES]),
+                                              ("face", ["uchar flags"], [(1,), (2,)])])
+    with pytest.raises(InputError, match="twice.ply: the PLY header declares an element twice"):
+        read_cloud(write(tmp_path, "twice.ply", data))
+
+
 def test_ply_line_ending_after_binary_data_is_accepted(tmp_path):
     """A newline some writers add after the binary data is not a record (shorter than one)."""
     data = ply_bytes("binary_little_endian", [("vertex", XYZ, POINTS)])

@@ -288,6 +288,8 @@ def _ply_header(data: bytes, label: str) -> _PlyHeader:
     if not have_format:
         raise InputError(f"{label}: the PLY header has no 'format ascii|binary_little_endian|"
                          "binary_big_endian 1.0' line")
+    if len({element.name for element in elements}) < len(elements):
+        raise InputError(f"{label}: the PLY header declares an element twice")
     for element in elements:
         names = [p.name for p in element.properties]
         if len(set(names)) < len(names):
