@@ -172,7 +172,7 @@ def test_the_table_angle_nan_is_not_blamed_on_a_move(scene, tmp_path, capsys):
 
 def test_negative_numbers_are_values_in_every_form(scene, tmp_path, capsys):
     # --envelope with a leading minus parses as the value it is (it used to need --envelope=-1,...).
-    out = tmp_path / "prog.nc"
+    out = tmp_path / "prog.csv"
     assert main(["toolpath", "--in", str(scene / "toolpath.nc"), "--calibration", str(scene / "ok.json"),
                  "--out", str(out), "--envelope", "-1e4,-10000,-.5e4,10000,10000,10000"]) == 0
     assert out.exists()

@@ -241,3 +241,16 @@ def test_a_part_being_written_by_a_running_process_is_left_alone(toolpath_files)
         process.kill()
         process.communicate(timeout=60)
     os.sync()
+
+
+def test_the_program_names_the_result_json_beside_it(ok_run, scene, tmp_path):
+    """The program's header carries the SHA-256 of the result.json of its set (as the manifest lists
+    it), also when the program is written later from that file by ``toolpath``."""
+    out = fresh_copy(ok_run, scene, tmp_path)
+    digest = hashlib.sha256((out / "result.json").read_bytes()).hexdigest()
+    assert json.loads((out / "manifest.json").read_text())["files"]["result.json"]["sha256"] == digest
+    assert f"result sha256 {digest[:16]}" in (out / "toolpath_calibrated.src").read_text()
+    later = tmp_path / "later.src"
+    assert main(["toolpath", "--in", str(scene / "toolpath.nc"), "--calibration", str(out / "result.json"),
+                 "--out", str(later)]) == 0
+    assert f"result sha256 {digest[:16]}" in later.read_text()

@@ -7,7 +7,7 @@ import pytest
 
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
-from workcal_wb.core.result import CalibrationResult, MatchResult
+from workcal_wb.core.result import CalibrationResult, MatchResult, result_fingerprint
 
 W = frames.rigid(frames.from_rotvec([0.1, -0.2, 0.3])[:3, :3], [800.0, 150.0, 120.0])
 SCAN_POINTS = 5_000_000
@@ -149,3 +149,15 @@ def test_a_valid_result_json_reads_and_summarises(tmp_path):
     path = tmp_path / "result.json"
     path.write_text(json.dumps(_valid()))
     assert "calibration OK" in CalibrationResult.from_json(path).summary()
+
+
+def test_a_result_read_back_gives_the_text_and_fingerprint_of_its_file(tmp_path):
+    """Programs name their result by the SHA-256 of result.json: reading the file back (with or without
+    its side file) must give the same text, so the same fingerprint."""
+    written = result(regions={"workpiece": np.arange(10), "reference": np.arange(10, 15), "source": "auto"})
+    written.to_json(tmp_path / "result.json")
+    text = (tmp_path / "result.json").read_text()
+    for with_regions in (True, False):
+        back = CalibrationResult.from_json(tmp_path / "result.json", with_regions=with_regions)
+        assert back.to_json_text() == text
+        assert result_fingerprint(back) == result_fingerprint(written)
