@@ -383,8 +383,9 @@ def _side_file_indices(path: Path, counts: dict, source: str) -> dict:
             arrays = {role: archive[role] for role in archive.files}
     except Exception as exc:  # numpy's npz/npy parsing raises many kinds on corrupt data
         raise InputError(f"{path}: cannot be read as region indices ({type(exc).__name__}: {exc})") from None
-    for role in arrays.keys() - counts.keys():
-        raise InputError(f"{path}: holds {role} indices that result.json does not list")
+    unlisted = sorted(arrays.keys() - counts.keys())
+    if unlisted:
+        raise InputError(f"{path}: holds {unlisted[0]} indices that result.json does not list")
     for role, count in counts.items():
         if role not in arrays:
             raise InputError(f"{path}: has no {role} indices; {source} says {count}")
