@@ -156,7 +156,8 @@ def _numeric_table(lines: list[str], first_number: int, label: str, what: str,
 
 def _integer_indices(values: np.ndarray, label: str) -> np.ndarray:
     """Vertex indices as int64; text formats give floats, which must be whole numbers."""
-    if values.dtype.kind == "f" and not (np.isfinite(values).all() and np.array_equal(values, np.round(values))):
+    whole = np.all(np.abs(values) < 2**62) and np.array_equal(values, np.round(values))  # NaN, inf, 1e20: not
+    if values.dtype.kind == "f" and not whole:
         raise InputError(f"{label}: a face has a vertex index that is not a whole number")
     return values.astype(np.int64)
 
