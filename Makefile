@@ -5,14 +5,14 @@ BUILD         := $(CURDIR)/build
 FREECAD_HOME  := $(BUILD)/freecad-home
 DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
-                 xvfb xauth libgl1-mesa-dri
+                 python3-hypothesis xvfb xauth libgl1-mesa-dri
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output
 XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup demo test test-headless test-gui test-other-freecad bench clean
+.PHONY: setup demo test test-headless test-gui test-other-freecad fuzz bench clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -35,6 +35,11 @@ test-gui: setup
 # debootstrap chroot cached under build/ (see .ci/other-debian).
 test-other-freecad:
 	.ci/other-debian test
+
+# Every reader with many more mutated files than `make test` tries (200 per kind there), fresh randomness.
+FUZZ_EXAMPLES ?= 20000
+fuzz: setup
+	WORKCAL_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest $(PYTEST_ARGS) $(CURDIR)/tests/core/test_fuzz.py
 
 bench: setup
 	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md

@@ -8,6 +8,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))  # helpers shared by tests/core and tests/fc (fuzz_inputs)
 
 # Real scanner data lives beside the checkout (../shared); tests that use it skip cleanly without it.
 SHARED = Path(os.environ.get("WORKCAL_SHARED", ROOT.parent / "shared"))

@@ -10,7 +10,7 @@ import pytest
 
 from workcal_wb.core import atomic, frames
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
-from workcal_wb.core.errors import InputError
+from workcal_wb.core.errors import OutputError
 from workcal_wb.core.report import deviation_map, write_report, write_study_report
 from workcal_wb.core.result import FAILED, CalibrationResult
 from workcal_wb.core.simulate.scanner import Scanner
@@ -68,9 +68,10 @@ def _same(a, b):
 def test_report_json_holds_the_calibration_numbers(written, lumpy):
     _, _, data = written
     result = lumpy[2]
-    expected = json.loads(json.dumps(result.to_dict(), allow_nan=True))
+    expected = json.loads(json.dumps(result.to_dict(region_indices=False), allow_nan=True))
     for key, value in expected.items():
         assert _same(data[key], value), key
+    assert data["regions"]["counts"]["workpiece"] == len(result.regions["workpiece"])  # no index lists
     back = CalibrationResult.from_dict(data)  # report.json is also a calibration file
     assert np.array_equal(back.W, result.W) and back.status == result.status
     assert data["report"]["format"] == "workcal-report"
@@ -136,7 +137,7 @@ def _failing_fsync(calls_before_failure):
 def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, calls_before_failure):
     result = lumpy[2]
     monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(calls_before_failure))
-    with pytest.raises(InputError, match="cannot write the report.*No space left"):
+    with pytest.raises(OutputError, match=r"report\.(json|html): cannot be written \(No space left"):
         write_report(result, tmp_path)
     assert not (tmp_path / "report.html").exists()
     assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".*.part"))
@@ -147,7 +148,7 @@ def test_a_failed_rewrite_keeps_the_previous_report(lumpy, tmp_path, monkeypatch
     write_report(result, tmp_path, title="first")
     before = (tmp_path / "report.html").read_bytes()
     monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(1))
-    with pytest.raises(InputError):
+    with pytest.raises(OutputError):
         write_report(result, tmp_path, title="second")
     assert (tmp_path / "report.html").read_bytes() == before
     assert not list(tmp_path.glob(".*.part"))

@@ -18,8 +18,8 @@ def test_simulate_writes_scans_models_and_truth(tmp_path, capsys):
                  "--noise", "0.05", "--lump"]) == EXIT_OK
     printed = capsys.readouterr().out
     assert "W = ^B X" in printed and "Omega" in printed and "scan_2.ply" in printed
-    assert sorted(p.name for p in out.iterdir()) == ["reference.ply", "scan_1.ply", "scan_2.ply", "toolpath.nc",
-                                                      "truth.json", "workpiece.ply"]
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "reference.ply", "scan_1.ply", "scan_2.ply",
+                                                      "toolpath.nc", "truth.json", "workpiece.ply"]
     truth = json.loads((out / "truth.json").read_text())
     scene = build_scene("figurine", seed=3, clay_change=["lump"])
     assert np.allclose(truth["W"], scene.W) and truth["clay_change"]["vertices"] > 0

@@ -69,15 +69,16 @@ def test_envelope_violation_exit_1(files, capsys):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--in", "missing.nc"], "cannot read G-code"),
+    (["--in", "missing.nc"], "missing.nc: file does not exist"),
     (["--envelope", "1,2,3"], "work envelope"),
     (["--table-angle", "30"], "--table-angle needs --table-frame"),
     (["--out", "prog.xyz"], "cannot tell the output format"),
-    (["--calibration", "nope.json"], "cannot read calibration"),
+    (["--calibration", "nope.json"], "nope.json: file does not exist"),
     (["--in", "part.FCStd"], "FreeCAD documents"),
 ])
 def test_bad_input_exit_2(files, capsys, monkeypatch, args, message):
     monkeypatch.chdir(files)
+    (files / "part.FCStd").write_bytes(b"PK\3\4")
     options = {"--in": "part.nc", "--calibration": "ok.json", "--out": "prog.csv", **dict(zip(args[::2], args[1::2]))}
     assert main(["toolpath"] + [word for option in options.items() for word in option]) == 2
     err = capsys.readouterr().err

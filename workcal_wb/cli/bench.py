@@ -5,6 +5,8 @@ import os
 from pathlib import Path
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.cli.arguments import seed
+from workcal_wb.core.outputs import check_file
 
 # The shared data (Stanford bunny scans) lives beside the checkout, as for the tests.
 DEFAULT_SHARED = Path(__file__).resolve().parents[2].parent / "shared"
@@ -19,7 +21,7 @@ def add_parser(subparsers):
                     "peak memory and the time ratio as Markdown. Exit status 1 when WorkCal misses a target.")
     p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
     p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
-    p.add_argument("--seed", type=int, default=0, help="seed for the case generation and the matchers")
+    p.add_argument("--seed", type=seed, default=0, help="seed for the case generation and the matchers")
     p.add_argument("--shared", metavar="DIR", type=Path,
                    default=Path(os.environ.get("WORKCAL_SHARED", DEFAULT_SHARED)),
                    help="folder holding data/stanford-bunny (default ../shared beside the checkout, or "
@@ -30,6 +32,7 @@ def add_parser(subparsers):
 def run(args) -> int:
     from workcal_wb.core.benchmark.run import run as run_benchmark
 
+    check_file(args.out)
     report = run_benchmark(args.shared, Path(args.out), seed=args.seed, quick=args.quick)
     print(f"wrote {args.out}")
     for line in report.missed:

@@ -7,17 +7,23 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.cli.arguments import finite, input_file, positive, seed
+from workcal_wb.cli.toolpath import add_machine_options, read_options
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
+from workcal_wb.core.files import read_text
 from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.readers import read_cloud
-from workcal_wb.core.result import OK
+from workcal_wb.core.result import FAILED, OK
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
-from workcal_wb.cli.toolpath import add_machine_options, read_options
 
 UNITS = ("mm", "m", "in")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
+PROGRAM_STEM = "toolpath_calibrated"
+# What a calibration writes into --out; a new run replaces all of it (a program a failed run must not leave too).
+OUTPUTS = ("result.json", "result.regions.npz", "report.html", "report.json", f"{PROGRAM_STEM}.*")
 
 
 def add_parser(subparsers):
@@ -25,28 +31,29 @@ def add_parser(subparsers):
         "calibrate", help="find W = ^B X from one scene scan and write result.json, report.html and the toolpath",
         description="Match the workpiece model X-A and the reference model B-P into one scan of the scene (regions "
                     "found automatically unless given), compute U = ^S X, V = ^S B and W = V^-1 U = ^B X, check the "
-                    "quality gates, and write result.json, report.html and, with --toolpath, the calibrated program. "
-                    "Exit status: 0 ok or ambiguous, 1 failed, 2 bad input.")
-    p.add_argument("--scan", nargs="+", required=True, metavar="FILE",
+                    "quality gates, and write result.json (region indices in result.regions.npz), report.html and, "
+                    "with --toolpath, the calibrated program.  The outputs replace the previous run's as one set "
+                    "(manifest.json lists them with their SHA-256); a failed run leaves no program.")
+    p.add_argument("--scan", nargs="+", required=True, metavar="FILE", type=input_file,
                    help="scene scan(s) from one scanner position (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
-    p.add_argument("--workpiece", required=True, metavar="FILE",
+    p.add_argument("--workpiece", required=True, metavar="FILE", type=input_file,
                    help="workpiece model X-A (mesh, point cloud, or STEP/IGES/BREP when run in freecadcmd)")
-    p.add_argument("--reference", required=True, metavar="FILE",
+    p.add_argument("--reference", required=True, metavar="FILE", type=input_file,
                    help="reference model B-P, in robot base frame coordinates (mesh or point cloud)")
     p.add_argument("--units", choices=UNITS, default="mm", help="units of the scan files (default mm)")
     p.add_argument("--model-units", choices=UNITS, help="units of the model files (default: as --units)")
-    p.add_argument("--toolpath", metavar="FILE", help="G-code toolpath in workpiece coordinates X (mm unless G20)")
+    p.add_argument("--toolpath", metavar="FILE", type=input_file, help="G-code toolpath in workpiece coordinates X (mm unless G20)")
     p.add_argument("--format", choices=list(FORMATS), default="gcode",
                    help="format of the calibrated toolpath (default gcode)")
     p.add_argument("--out", default="workcal-out", metavar="DIR", help="folder for the outputs (default workcal-out)")
-    p.add_argument("--tolerance", type=float, default=0.3, metavar="MM",
+    p.add_argument("--tolerance", type=positive, default=0.3, metavar="MM",
                    help="quality tolerance for residuals and toolpath uncertainty (default 0.3 mm)")
     p.add_argument("--method", choices=["robust", "icp", "hausdorff"], default="robust", help="matching method")
-    p.add_argument("--seed", type=int, default=0, help="seed for the random parts (repeatable runs)")
+    p.add_argument("--seed", type=seed, default=0, help="seed for the random parts (repeatable runs)")
     for role in ("workpiece", "reference"):
-        p.add_argument(f"--{role}-indices", metavar="FILE",
+        p.add_argument(f"--{role}-indices", metavar="FILE", type=input_file,
                        help=f"{role} region as a text file of scan point indices (0-based); needs the other region too")
-        p.add_argument(f"--{role}-box", type=float, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        p.add_argument(f"--{role}-box", type=finite, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                        help=f"{role} region as a box in scanner coordinates, mm")
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
@@ -63,10 +70,7 @@ def _regions(args, scan: Cloud):
         if indices and box:
             raise InputError(f"--{role}-indices and --{role}-box: give one of them, not both")
         if indices:
-            try:
-                regions[role] = np.loadtxt(indices, dtype=np.int64, ndmin=1)
-            except (OSError, ValueError) as exc:
-                raise InputError(f"{indices}: not a list of integer point indices ({exc})") from exc
+            regions[role] = read_indices(indices, len(scan))
         elif box:
             lo, hi = np.array(box[:3]), np.array(box[3:])
             inside = np.all((scan.points >= lo) & (scan.points <= hi), axis=1)
@@ -76,10 +80,26 @@ def _regions(args, scan: Cloud):
     return regions
 
 
+def read_indices(path, scan_points: int) -> np.ndarray:
+    """Scan point indices from a text file: whole numbers separated by white space or commas, # comments;
+    the error names the line of the first value that is not an index of the scan."""
+    values = []
+    for number, line in enumerate(read_text(path, "index file").splitlines(), 1):
+        for word in line.split("#", 1)[0].replace(",", " ").split():
+            if not (word.isascii() and word.isdigit()):
+                raise InputError(f"{path}: line {number}: {word[:40]!r} is not a point index (a whole number >= 0)")
+            if int(word) >= scan_points:
+                raise InputError(f"{path}: line {number}: index {word} is outside the scan's {scan_points} points")
+            values.append(int(word))
+    if not values:
+        raise InputError(f"{path}: holds no point indices")
+    return np.array(values, dtype=np.int64)
+
+
 def read_model(path, units: str) -> Cloud:
     """A model file; CAD solids (STEP, IGES, BREP) are tessellated through FreeCAD when it is there."""
     if Path(path).suffix.lower() not in CAD_SUFFIXES:
-        return read_cloud(path, units=units)
+        return read_cloud(path, units=units, unit_option="--model-units")
     try:
         from workcal_wb.fc.models import read_model_file
     except ImportError:
@@ -88,38 +108,54 @@ def read_model(path, units: str) -> Cloud:
     return read_model_file(path, units)
 
 
+def warn(clouds) -> None:
+    for cloud in clouds:
+        for warning in cloud.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+
+
 def run(args) -> int:
     from workcal_wb.core.report import write_report
 
-    scans = [read_cloud(f, units=args.units) for f in args.scan]
-    for cloud in scans:
-        for warning in cloud.warnings:
-            print(f"warning: {warning}", file=sys.stderr)
-    model_units = args.model_units or args.units
-    workpiece = read_model(args.workpiece, model_units)
-    reference = read_model(args.reference, model_units)
-    toolpath = read_gcode(args.toolpath, **read_options(args)) if args.toolpath else None
-    merged = merge_scans(scans)
-    options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)
-    result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
-                       toolpath_points=None if toolpath is None else path_points(toolpath)[0])
+    inputs = [*args.scan, args.workpiece, args.reference, args.toolpath, args.workpiece_indices, args.reference_indices]
+    with OutputFolder(args.out, "calibrate", OUTPUTS, keep=[p for p in inputs if p]) as outputs:
+        scans = [read_cloud(f, units=args.units, unit_option="--units") for f in args.scan]
+        model_units = args.model_units or args.units
+        workpiece = read_model(args.workpiece, model_units)
+        reference = read_model(args.reference, model_units)
+        warn([*scans, workpiece, reference])
+        toolpath = read_gcode(args.toolpath, **read_options(args)) if args.toolpath else None
+        merged = merge_scans(scans)
+        options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)
+        result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
+                           toolpath_points=None if toolpath is None else path_points(toolpath)[0])
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    result.to_json(out / "result.json")
-    workpiece_points = merged.points[result.regions["workpiece"]] if result.regions.get("workpiece") else None
-    report = write_report(result, out, workpiece_points=workpiece_points, workpiece_model=workpiece)
+        result.to_json(outputs.file("result.json"))
+        region = result.regions.get("workpiece")
+        write_report(result, outputs.folder(), workpiece_points=None if region is None else merged.points[region],
+                     workpiece_model=workpiece)
+        refused = _program(args, toolpath, result, outputs)
+        manifest = outputs.commit(result.status)
     print(result.summary())
-    print(f"wrote {out / 'result.json'}, {report['html']}")
-    if toolpath is not None and result.W is None:
-        print("workcal calibrate: toolpath not written: the calibration found no W", file=sys.stderr)
-    elif toolpath is not None:
-        program = out / f"toolpath_calibrated{FORMATS[args.format].EXTENSION}"
-        try:
-            export(toolpath, result, args.format, program, force=args.force, machine=args.machine,
-                   vertical_tol_deg=args.vertical_tol, rotary=args.rotary, calibration_source=str(out / "result.json"))
-            print(f"wrote {program}" + (" (FORCED)" if result.status != OK else ""))
-        except ExportRefused as exc:
-            print(f"workcal calibrate: toolpath not written: {exc}", file=sys.stderr)
-    return EXIT_OK if result.W is not None and result.status != "failed" else EXIT_FAILED
+    print(f"wrote {args.out}: {', '.join(manifest['files'])}")
+    if refused:
+        print(f"workcal calibrate: toolpath not written: {refused}", file=sys.stderr)
+    elif toolpath is not None and result.status != OK:
+        print(f"workcal calibrate: warning: FORCED program from a {result.status!r} calibration", file=sys.stderr)
+    return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
+
+def _program(args, toolpath, result, outputs) -> str | None:
+    """Stage the calibrated program; the reason when it is refused (or no toolpath was given: None)."""
+    if toolpath is None:
+        return None
+    if result.W is None:
+        return "the calibration found no W"
+    name = f"{PROGRAM_STEM}{FORMATS[args.format].EXTENSION}"
+    try:
+        export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
+               vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
+               calibration_source=str(Path(args.out) / "result.json"))
+    except ExportRefused as exc:
+        return str(exc)
+    return None

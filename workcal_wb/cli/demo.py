@@ -12,14 +12,19 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.cli.arguments import seed
+from workcal_wb.cli.calibrate import OUTPUTS as CALIBRATION_OUTPUTS
 from workcal_wb.cli.simulate import write_simulation
 from workcal_wb.core import frames
+from workcal_wb.core.atomic import atomic_write_text
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
+from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.toolpath import ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
 PROGRAMS = {"gcode": "toolpath_calibrated.nc", "krl": "toolpath_calibrated.src"}
+OUTPUTS = (*CALIBRATION_OUTPUTS, "truth_check.json", "input")
 
 
 def add_parser(subparsers):
@@ -29,7 +34,7 @@ def add_parser(subparsers):
                     "25 cm car body with a clay lump, calibrated with automatic regions; writes inputs, result.json, "
                     "report.html and the calibrated toolpath (G-code and KUKA KRL) into --out.")
     p.add_argument("--out", default="build/demo", metavar="DIR", help="output folder (default build/demo)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the sample scene (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the sample scene (default 0)")
     return p
 
 
@@ -37,42 +42,46 @@ def run(args) -> int:
     from workcal_wb.core.report import write_report
 
     out = Path(args.out).resolve()
-    inputs = out / "input"
-    print(f"WorkCal demo: simulating the sample scene into {inputs}")
-    scene, _ = write_simulation(inputs, "car", seed=args.seed, clay_change=["lump"])
+    with OutputFolder(out, "demo", OUTPUTS) as outputs:
+        staged = outputs.folder()
+        inputs = staged / "input"
+        print(f"WorkCal demo: simulating the sample scene into {out / 'input'}")
+        scene, _ = write_simulation(inputs, "car", seed=args.seed, clay_change=["lump"])
 
-    scan = read_cloud(inputs / "scan.ply")
-    workpiece = read_cloud(inputs / "workpiece.ply")
-    reference = read_cloud(inputs / "reference.ply")
-    toolpath = read_gcode(inputs / "toolpath.nc")
-    toolpath_points = path_points(toolpath)[0]
-    print(f"calibrating {len(scan)} scan points against {workpiece.name} and {reference.name} (automatic regions)")
-    result = calibrate(scan, workpiece, reference, toolpath_points=toolpath_points,
-                       options=CalibrationOptions(seed=args.seed))
-    result.to_json(out / "result.json")
-    region = result.regions.get("workpiece")
-    report = write_report(result, out, workpiece_points=scan.points[region] if region else None,
-                          workpiece_model=workpiece, title="WorkCal demo: sample scene")
-    print(result.summary())
+        scan = read_cloud(inputs / "scan.ply")
+        workpiece = read_cloud(inputs / "workpiece.ply")
+        reference = read_cloud(inputs / "reference.ply")
+        toolpath = read_gcode(inputs / "toolpath.nc")
+        toolpath_points = path_points(toolpath)[0]
+        print(f"calibrating {len(scan)} scan points against {workpiece.name} and {reference.name} (automatic regions)")
+        result = calibrate(scan, workpiece, reference, toolpath_points=toolpath_points,
+                           options=CalibrationOptions(seed=args.seed))
+        result.to_json(staged / "result.json")
+        region = result.regions.get("workpiece")
+        write_report(result, staged, workpiece_points=None if region is None else scan.points[region],
+                     workpiece_model=workpiece, title="WorkCal demo: sample scene")
+        print(result.summary())
 
-    written = []
-    for fmt, name in PROGRAMS.items():
-        try:
-            # the sample scene tilts the part a few degrees: G-code for a 5-axis machine in tool-centre-point mode
-            export(toolpath, result, fmt, out / name, calibration_source=str(out / "result.json"),
-                   machine="5axis-tcp" if fmt == "gcode" else None)
-            written.append(name)
-        except ExportRefused as exc:
-            print(f"not written: {name}: {exc}")
-    if result.W is None:
+        written = []
+        for fmt, name in PROGRAMS.items():
+            try:
+                # the sample scene tilts the part a few degrees: G-code for a 5-axis machine in tool-centre-point mode
+                export(toolpath, result, fmt, staged / name, calibration_source=str(out / "result.json"),
+                       machine="5axis-tcp" if fmt == "gcode" else None)
+                written.append(name)
+            except ExportRefused as exc:
+                print(f"not written: {name}: {exc}")
+        errors = None if result.W is None else error_against_truth(result.W, scene.W, toolpath_points)
+        if errors is not None:
+            atomic_write_text(staged / "truth_check.json", json.dumps(errors, indent=2) + "\n")
+        outputs.commit(result.status)
+    if errors is None:
         print("no W: the calibration failed")
         return EXIT_FAILED
-    errors = error_against_truth(result.W, scene.W, toolpath_points)
-    (out / "truth_check.json").write_text(json.dumps(errors, indent=2) + "\n", encoding="utf-8")
     print(f"error against the known truth: rotation {errors['rotation_deg']:.4f} deg, translation "
           f"{errors['translation_mm']:.4f} mm, at the toolpath max {errors['toolpath_max_mm']:.4f} mm "
           f"(predicted bound {result.uncertainty.get('toolpath_bound_mm', float('nan')):.4f} mm)")
-    print(f"outputs in {out}: result.json, {Path(report['html']).name}, {', '.join(written) or 'no program'}")
+    print(f"outputs in {out}: result.json, report.html, {', '.join(written) or 'no program'}")
     return EXIT_OK if result.status != "failed" else EXIT_FAILED
 
 

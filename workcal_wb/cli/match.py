@@ -5,7 +5,9 @@ import json
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.cli.arguments import input_file, positive, seed
 from workcal_wb.core.match import METHODS, match
+from workcal_wb.core.outputs import check_file
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.result import FAILED
 
@@ -16,26 +18,27 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "match", help="find U = ^S X, the pose that places MODEL into SCAN, with its quality",
         description="Match a model (mesh or point cloud, frame X) into a scan (frame S) without an initial guess "
-                    "and print U and its quality. Exit status: 0 ok or ambiguous (see the reasons), 1 failed, "
-                    "2 bad input.")
-    p.add_argument("scan", metavar="SCAN", help="the scan (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
-    p.add_argument("model", metavar="MODEL", help="the model X-A (mesh or point cloud)")
+                    "and print U and its quality.")
+    p.add_argument("scan", metavar="SCAN", type=input_file, help="the scan (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
+    p.add_argument("model", metavar="MODEL", type=input_file, help="the model X-A (mesh or point cloud)")
     p.add_argument("--units", choices=UNITS, default="mm", help="units of the scan file (default mm)")
     p.add_argument("--model-units", choices=UNITS, help="units of the model file (default: as --units)")
     p.add_argument("--method", choices=METHODS, default="robust",
                    help="robust (point-to-plane, robust kernel, global search; default), or the paper's "
                         "least-squares closest-point ICP (icp) or mean directed Hausdorff distance (hausdorff)")
     p.add_argument("--json", metavar="FILE", help="also write the full result as JSON (matrix = U, row-major, mm)")
-    p.add_argument("--tolerance", type=float, default=0.3, metavar="MM",
+    p.add_argument("--tolerance", type=positive, default=0.3, metavar="MM",
                    help="deviation tolerance for the within-tolerance figure and the fit check (default 0.3 mm)")
-    p.add_argument("--seed", type=int, default=0, help="seed for the random parts (repeatable runs)")
+    p.add_argument("--seed", type=seed, default=0, help="seed for the random parts (repeatable runs)")
     return p
 
 
 def run(args) -> int:
-    scan = read_cloud(args.scan, units=args.units)
-    model = read_cloud(args.model, units=args.model_units or args.units)
-    for warning in model.warnings:
+    if args.json:
+        check_file(args.json)
+    scan = read_cloud(args.scan, units=args.units, unit_option="--units")
+    model = read_cloud(args.model, units=args.model_units or args.units, unit_option="--model-units")
+    for warning in scan.warnings + model.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     result = match(scan, model, method=args.method, tolerance_mm=args.tolerance, seed=args.seed)
     print(result.summary())

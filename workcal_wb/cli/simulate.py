@@ -4,16 +4,20 @@ from __future__ import annotations
 from pathlib import Path
 
 from workcal_wb.cli import EXIT_OK
+from workcal_wb.cli.arguments import count, non_negative, positive, seed
 from workcal_wb.core import frames
 from workcal_wb.core.atomic import atomic_write_text
-from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.simulate.scanner import scanner_ring
 from workcal_wb.core.simulate.scene import build_scene
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath
 from workcal_wb.core.simulate.truth import scene_truth, write_truth
 from workcal_wb.core.toolpath import format_gcode
 from workcal_wb.core.writers import write_ply
+
+# What a simulation writes into --out; a new run replaces all of it (fewer scan positions too).
+OUTPUTS = ("scan.ply", "scan_*.ply", "workpiece.ply", "reference.ply", "toolpath.nc", "truth.json")
 
 
 def add_parser(subparsers):
@@ -25,11 +29,11 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="folder to write into (created if missing)")
     p.add_argument("--workpiece", choices=["car", "figurine"], default="car",
                    help="the 25 cm car model or the 2 cm figurine (default car)")
-    p.add_argument("--seed", type=int, default=0, help="seed for the workpiece pose, scanner placement and noise")
-    p.add_argument("--positions", type=int, default=1, metavar="K",
+    p.add_argument("--seed", type=seed, default=0, help="seed for the workpiece pose, scanner placement and noise")
+    p.add_argument("--positions", type=count, default=1, metavar="K",
                    help="scanner positions spread around the scene (default 1: the standard set-up)")
-    p.add_argument("--noise", type=float, metavar="MM", help="noise sigma along the ray (default 0.1 mm)")
-    p.add_argument("--pitch", type=float, metavar="MM",
+    p.add_argument("--noise", type=non_negative, metavar="MM", help="noise sigma along the ray (default 0.1 mm)")
+    p.add_argument("--pitch", type=positive, metavar="MM",
                    help="sample spacing at the focus distance (default: zoomed to fit workpiece and reference)")
     p.add_argument("--clutter", action="store_true", help="also put a loose box and a cylinder on the platform")
     p.add_argument("--lump", action="store_true", help="add a clay lump to the workpiece after its model was made")
@@ -38,11 +42,11 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
-    if args.positions < 1:
-        raise InputError(f"--positions must be at least 1, got {args.positions}")
     edits = [kind for kind, wanted in (("lump", args.lump), ("carve", args.carve)) if wanted]
-    scene, scans = write_simulation(Path(args.out), args.workpiece, seed=args.seed, positions=args.positions,
-                                    noise=args.noise, pitch=args.pitch, clutter=args.clutter, clay_change=edits)
+    with OutputFolder(args.out, "simulate", OUTPUTS) as outputs:
+        scene, scans = write_simulation(outputs.folder(), args.workpiece, seed=args.seed, positions=args.positions,
+                                        noise=args.noise, pitch=args.pitch, clutter=args.clutter, clay_change=edits)
+        outputs.commit("ok")
     _print_summary(scene, scans, Path(args.out))
     return EXIT_OK
 

@@ -5,10 +5,14 @@ import json
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
+from workcal_wb.cli.arguments import count, envelope, finite, input_file, non_negative, positive
+from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
+from workcal_wb.core.files import read_text
+from workcal_wb.core.outputs import check_file
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, MACHINES, Envelope, ExportOptions, ExportRefused,
-                                      RotaryTable, export, format_for, read_gcode)
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, MACHINES, ExportOptions, ExportRefused, RotaryTable,
+                                      export, format_for, read_gcode)
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN
 from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
 from workcal_wb.core.toolpath.gcode import BLOCK_DELETE, DWELL_P
@@ -23,27 +27,29 @@ def add_parser(subparsers):
                     "W from a calibration result, and write KRL, RAPID, URScript, Fanuc LS, G-code or CSV. "
                     "Nothing is written when the calibration failed its gates (unless --force), when a number "
                     "is not finite, or when a point leaves the --envelope.")
-    p.add_argument("--in", dest="input", required=True, metavar="FILE", help="G-code file (.nc, .ngc, .gcode, ...)")
-    p.add_argument("--calibration", required=True, metavar="FILE", help="calibration result JSON (W = ^B X)")
+    p.add_argument("--in", dest="input", required=True, metavar="FILE", type=input_file,
+                   help="G-code file (.nc, .ngc, .gcode, ...)")
+    p.add_argument("--calibration", required=True, metavar="FILE", type=input_file,
+                   help="calibration result JSON (W = ^B X)")
     p.add_argument("--format", choices=list(FORMATS), help="output format (default: from the --out extension)")
     p.add_argument("--out", required=True, metavar="FILE", help="program to write (replaced atomically)")
     p.add_argument("--force", action="store_true",
                    help="export even when the calibration failed its quality gates (the file then says FORCED)")
-    p.add_argument("--envelope", metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+    p.add_argument("--envelope", metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", type=envelope,
                    help="work envelope in the robot base frame, mm: refuse any point outside it")
-    p.add_argument("--table-frame", metavar="FILE", help="JSON 4x4 ^B Q of the rotary table (or {\"matrix\": ...})")
-    p.add_argument("--table-angle", type=float, metavar="DEG",
+    p.add_argument("--table-frame", metavar="FILE", type=input_file, help="JSON 4x4 ^B Q of the rotary table (or {\"matrix\": ...})")
+    p.add_argument("--table-angle", type=finite, metavar="DEG",
                    help="rotary table angle to export at (needs --table-frame)")
-    p.add_argument("--chord-tol", type=float, default=DEFAULT_CHORD_TOL_MM, metavar="MM",
+    p.add_argument("--chord-tol", type=positive, default=DEFAULT_CHORD_TOL_MM, metavar="MM",
                    help=f"chordal tolerance for arcs turned into lines (default {DEFAULT_CHORD_TOL_MM} mm)")
     p.add_argument("--units-in", choices=["mm", "in"], default="mm",
                    help="units of the G-code until it says G20/G21 (default mm)")
     p.add_argument("--krl-mode", choices=KRL_MODES, default="base",
                    help="KRL: 'base' sets $BASE = W and keeps workpiece coordinates; 'transformed' writes points in B")
-    p.add_argument("--rapid-feed", type=float, default=DEFAULT_RAPID_FEED_MM_MIN, metavar="MM_PER_MIN",
+    p.add_argument("--rapid-feed", type=positive, default=DEFAULT_RAPID_FEED_MM_MIN, metavar="MM_PER_MIN",
                    help=f"robot speed for G0 moves (default {DEFAULT_RAPID_FEED_MM_MIN:g} mm/min)")
     add_machine_options(p)
-    p.add_argument("--max-lines", type=int, metavar="N",
+    p.add_argument("--max-lines", type=count, metavar="N",
                    help="lines per program part before a robot program is split into parts called by a main program "
                         "(default: the controller's limit, e.g. 9999 for Fanuc)")
     return p
@@ -55,7 +61,7 @@ def add_machine_options(p) -> None:
                    help="target: 3axis (G-code, refused when W tilts the tool past --vertical-tol), 5axis-tcp "
                         "(G-code with rotary axes in tool-centre-point mode), robot (KRL, RAPID, URScript, Fanuc, "
                         "CSV); default 3axis for G-code, robot otherwise")
-    p.add_argument("--vertical-tol", type=float, default=DEFAULT_VERTICAL_TOL_DEG, metavar="DEG",
+    p.add_argument("--vertical-tol", type=non_negative, default=DEFAULT_VERTICAL_TOL_DEG, metavar="DEG",
                    help=f"3-axis: largest tilt of the tool axis from the machine's Z that W may cause "
                         f"(default {DEFAULT_VERTICAL_TOL_DEG} deg)")
     p.add_argument("--rotary", choices=list(ROTARY), default="ab",
@@ -78,25 +84,26 @@ def _table(args) -> RotaryTable | None:
             raise InputError("--table-angle needs --table-frame (the table's frame ^B Q)")
         return None
     try:
-        with open(args.table_frame, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise InputError(f"{args.table_frame}: cannot read table frame ({exc.strerror})") from exc
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{args.table_frame}: not valid JSON ({exc})") from exc
+        data = json.loads(read_text(args.table_frame, "table frame file"))
+    except (ValueError, RecursionError) as exc:
+        raise InputError(f"{args.table_frame}: not valid JSON ({exc})") from None
     matrix = data.get("matrix") if isinstance(data, dict) else data
-    return RotaryTable(matrix, args.table_angle or 0.0, source=args.table_frame)
+    try:
+        frame = frames.as_transform(matrix, "table frame")
+    except (ValueError, TypeError) as exc:
+        raise InputError(f"{args.table_frame}: {exc}") from None
+    return RotaryTable(frame, args.table_angle or 0.0, source=args.table_frame)
 
 
 def run(args) -> int:
     if args.input.lower().endswith(".fcstd"):
         raise InputError(f"{args.input}: FreeCAD documents are read inside FreeCAD (WorkCal workbench); "
                          "export the Job's G-code, or pass a G-code file here")
-    toolpath = read_gcode(args.input, units=args.units_in, **read_options(args))
-    calibration = CalibrationResult.from_json(args.calibration)
     fmt = args.format or format_for(args.out)
-    options = ExportOptions(force=args.force, table=_table(args),
-                            envelope=Envelope.parse(args.envelope) if args.envelope else None,
+    check_file(args.out)
+    toolpath = read_gcode(args.input, units=args.units_in, **read_options(args))
+    calibration = CalibrationResult.from_json(args.calibration, with_regions=False)
+    options = ExportOptions(force=args.force, table=_table(args), envelope=args.envelope,
                             chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
                             machine=args.machine, vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
                             max_lines=args.max_lines, calibration_source=args.calibration)

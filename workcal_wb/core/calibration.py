@@ -8,15 +8,16 @@ docs/architecture.md.)
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import frames
-from .errors import InputError
+from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import MatchOptions, match
+from .match import METHODS, MatchOptions, match
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
@@ -30,6 +31,17 @@ class CalibrationOptions:
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
     seed: int = 0
+
+    def __post_init__(self):
+        if not (isinstance(self.tolerance_mm, (int, float)) and math.isfinite(self.tolerance_mm)
+                and self.tolerance_mm > 0):
+            raise InputError(f"tolerance must be a positive number of mm, not {self.tolerance_mm}")
+        if self.method not in METHODS:
+            raise InputError(f"unknown method {self.method!r}; choose one of {', '.join(METHODS)}")
+        if not (isinstance(self.resamples, int) and self.resamples >= 1):
+            raise InputError(f"resamples must be a whole number of at least 1, not {self.resamples}")
+        if not (isinstance(self.seed, int) and 0 <= self.seed < 2**63):
+            raise InputError(f"seed must be a whole number from 0 to 2**63 - 1, not {self.seed}")
 
 
 # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
@@ -65,8 +77,14 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     warnings = list(scan.warnings)
 
     if regions is None:
-        found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
-                       progress=lambda f, m: report(0.6 * f, m))
+        try:
+            found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
+                           progress=lambda f, m: report(0.6 * f, m))
+        except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
+            return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
+                                     tolerance_mm=options.tolerance_mm, seed=options.seed,
+                                     inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
+                                     time_s=time.perf_counter() - started)
         warnings += found.warnings
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
@@ -85,7 +103,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
 
     result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
                   inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
-                  regions={**{k: np.asarray(v).tolist() for k, v in region_idx.items()}, "source": source},
+                  regions={**{k: np.asarray(v, dtype=np.int64) for k, v in region_idx.items()}, "source": source},
                   warnings=warnings + [f"workpiece match: {w}" for w in U_match.warnings]
                   + [f"reference match: {w}" for w in V_match.warnings])
     failed = [(role, m) for role, m in (("workpiece", U_match), ("reference", V_match)) if m.matrix is None]

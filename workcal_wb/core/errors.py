@@ -12,6 +12,15 @@ class InputError(WorkCalError):
     """A file, object or parameter that cannot be used as given."""
 
 
+class NotFound(InputError):
+    """An object the scan should show (the reference, the workpiece) is not in it: the calibration
+    ran and failed, so ``calibrate`` reports it as a failed result rather than raising."""
+
+
+class OutputError(WorkCalError):
+    """An output cannot be written (no such folder, a file in the way, no permission, disk full)."""
+
+
 class MissingDependency(WorkCalError):
     """A Python package WorkCal needs is not installed; the message says what to install."""
 

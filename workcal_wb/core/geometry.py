@@ -7,6 +7,10 @@ import numpy as np
 
 from .errors import InputError
 
+# No scanner measures a point 1000 km away: a coordinate beyond this is a corrupt value (1e308), and
+# kept it would overflow the geometry (squared distances, voxel indices) of every later step.
+MAX_COORDINATE_MM = 1e9
+
 
 @dataclass
 class Cloud:
@@ -57,17 +61,19 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
 
     Scanners write NaN for pixels without a return and repeat points at seams; both are normal
     and only worth a warning, but a cloud with (almost) nothing left is an error that names it.
+    Coordinates beyond MAX_COORDINATE_MM count as not finite.
     """
     pts = cloud.points
     if len(pts) == 0:
         raise InputError(f"{cloud.name}: contains no points")
-    finite = np.all(np.isfinite(pts), axis=1)
+    finite = np.all(np.abs(pts) <= MAX_COORDINATE_MM, axis=1)  # False for NaN too
     if cloud.normals is not None:
         finite &= np.all(np.isfinite(cloud.normals), axis=1)
     warnings = list(cloud.warnings)
     if cloud.is_mesh:
         if not finite.all():
-            raise InputError(f"{cloud.name}: {int((~finite).sum())} mesh vertices are NaN or infinite")
+            raise InputError(f"{cloud.name}: {int((~finite).sum())} mesh vertices are NaN or infinite (or beyond "
+                             f"{MAX_COORDINATE_MM / 1e6:g} km)")
         bad = (cloud.triangles < 0) | (cloud.triangles >= len(pts))
         if bad.any():
             raise InputError(f"{cloud.name}: faces refer to vertices that do not exist "
@@ -75,9 +81,11 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         return Cloud(pts, cloud.normals, cloud.triangles, cloud.name, warnings)
     keep = np.flatnonzero(finite)
     if len(keep) < len(pts):
-        warnings.append(f"{cloud.name}: ignored {len(pts) - len(keep)} points with NaN or infinite coordinates")
+        warnings.append(f"{cloud.name}: ignored {len(pts) - len(keep)} points with NaN or infinite coordinates "
+                        f"(or beyond {MAX_COORDINATE_MM / 1e6:g} km)")
     if len(keep) == 0:
-        raise InputError(f"{cloud.name}: all {len(pts)} points have NaN or infinite coordinates")
+        raise InputError(f"{cloud.name}: all {len(pts)} points have NaN or infinite coordinates (or beyond "
+                         f"{MAX_COORDINATE_MM / 1e6:g} km)")
     duplicate = _duplicates(pts[keep])
     if duplicate.any():
         warnings.append(f"{cloud.name}: ignored {int(duplicate.sum())} duplicate points")

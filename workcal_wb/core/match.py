@@ -155,8 +155,10 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
 def _checked_options(options: MatchOptions) -> MatchOptions:
     if options.method not in METHODS:
         raise InputError(f"unknown match method {options.method!r}; choose one of {', '.join(METHODS)}")
-    if not options.tolerance_mm > 0:
-        raise InputError(f"match tolerance must be > 0 mm, got {options.tolerance_mm}")
+    if not 0 < options.tolerance_mm < float("inf"):
+        raise InputError(f"match tolerance must be a finite number > 0 mm, got {options.tolerance_mm}")
+    if not (isinstance(options.seed, int) and 0 <= options.seed < 2**63):
+        raise InputError(f"match seed must be a whole number from 0 to 2**63 - 1, got {options.seed}")
     if options.coarse_voxel_mm is not None and not options.coarse_voxel_mm > 0:
         raise InputError(f"coarse voxel must be > 0 mm, got {options.coarse_voxel_mm}")
     return options

@@ -70,8 +70,12 @@ def median_spacing(points: np.ndarray, sample: int = 20000, seed: int = 0) -> fl
 
 
 def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
-    """One int64 key per point naming its voxel (21 bits per axis, about 2 million voxels across)."""
+    """One int64 key per point naming its voxel: 21 bits per axis, or, for a cloud more than 2**21
+    voxels across (a stray point far away), the voxel's rank among the occupied ones, so that two
+    distant voxels never share a key."""
     cells = np.floor((points - points.min(axis=0)) / voxel).astype(np.int64)
+    if len(cells) and cells.max() >= 1 << 21:
+        return np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1).astype(np.int64)
     return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
 
 
@@ -104,6 +108,7 @@ def pca_normals(points: np.ndarray, k: int = 12) -> np.ndarray:
     thread start-up costs more than the work)."""
     k = min(k, len(points))
     _, nb = cKDTree(points).query(points, k)
+    nb = nb.reshape(len(points), k)  # k = 1 (a single point) gives a flat array
     local = points[nb] - points[nb].mean(axis=1, keepdims=True)
     _, vecs = np.linalg.eigh(np.einsum("nki,nkj->nij", local, local))
     return vecs[:, :, 0]

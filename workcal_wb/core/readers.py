@@ -14,8 +14,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .errors import InputError
+from .files import read_bytes
 from .geometry import Cloud, checked
-from .units import extent_warning, mm_per_unit
+from .units import extent_warnings, mm_per_unit
 
 # Headers are small; searching further would only scan binary data of a file without one.
 _MAX_HEADER_BYTES = 1 << 20
@@ -34,11 +35,12 @@ class _Parsed(NamedTuple):
     warnings: tuple[str, ...] = ()
 
 
-def read_cloud(path, units: str | None = "mm", name: str | None = None) -> Cloud:
+def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit") -> Cloud:
     """Read a point cloud or mesh file into a checked ``Cloud`` in mm.
 
     ``units`` is the file's length unit; ``None`` uses the ``comment units`` line of a PLY written by
-    WorkCal (mm when there is none).  ``name`` defaults to the file name.
+    WorkCal (mm when there is none).  ``name`` defaults to the file name.  ``unit_option`` is how the
+    caller's user sets the unit (e.g. "--model-units"), named in a warning about a suspect size.
     """
     path = Path(path)
     parse = _PARSERS.get(path.suffix.lower())
@@ -47,7 +49,7 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None) -> Cloud
                          f"WorkCal reads {', '.join(_PARSERS)}")
     scale = None if units is None else mm_per_unit(units)  # a bad unit is refused before reading
     label = str(path)
-    data = _file_bytes(path)
+    data = read_bytes(path)
     try:
         parsed = parse(data, label)
     except (ValueError, IndexError, struct.error, OverflowError) as exc:
@@ -59,30 +61,15 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None) -> Cloud
             scale = mm_per_unit(units)
         except InputError as exc:
             raise InputError(f"{label}: the file declares {exc}") from None
-    cloud = checked(Cloud(parsed.points * scale, parsed.normals, parsed.triangles, path.name,
-                          list(parsed.warnings)))
+    with np.errstate(over="ignore"):  # a value too large in mm becomes inf: refused or dropped by checked
+        points = parsed.points * scale
+    cloud = checked(Cloud(points, parsed.normals, parsed.triangles, path.name, list(parsed.warnings)))
     cloud.name = name or path.name
-    warning = extent_warning(cloud.diagonal(), path.name, units)
-    if warning:
-        cloud.warnings.append(warning)
+    cloud.warnings += extent_warnings(cloud.points, path.name, units, unit_option)
     return cloud
 
 
 # --- shared steps ------------------------------------------------------------------------------
-
-def _file_bytes(path: Path) -> bytes:
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{path}: file does not exist") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    if not data or data.isspace():
-        raise InputError(f"{path}: file is empty")
-    return data
-
 
 def _text(data: bytes, label: str) -> str:
     """The file as text; binary data under a text extension is refused instead of misread."""
@@ -94,6 +81,36 @@ def _text(data: bytes, label: str) -> str:
 
 def _truncated(label: str, declared: int, noun: str, found: int) -> InputError:
     return InputError(f"{label}: header declares {declared} {noun}, data ends after {found}")
+
+
+def _trailing(label: str, where: str, declared: int, noun: str) -> InputError:
+    """Data after everything the header declares: a count that is too small, or a corrupt file."""
+    return InputError(f"{label}: {where}: data continues after the {declared} {noun} the header declares; "
+                      "the header's count is wrong or the file is corrupt")
+
+
+def _binary_tail(data: bytes, end: int) -> str | None:
+    """Where data continues after binary data that should end at ``end`` ("byte N (k bytes)"), or None.
+    One line ending after the data (some writers add one) is not a record."""
+    if data[end:] in (b"", b"\n", b"\r\n"):
+        return None
+    return f"byte {end} ({len(data) - end} bytes more)"
+
+
+def _check_binary_end(data: bytes, end: int, label: str, declared: int, noun: str) -> None:
+    where = _binary_tail(data, end)
+    if where:
+        raise _trailing(label, where, declared, noun)
+
+
+def _line_of_token(text: bytes, index: int) -> int:
+    """1-based line (within ``text``) of whitespace-separated token number ``index`` (error paths only)."""
+    seen = 0
+    for number, line in enumerate(text.split(b"\n"), 1):
+        seen += len(line.split())
+        if seen > index:
+            return number
+    return number
 
 
 def _floats(tokens, label: str, what: str) -> np.ndarray:
@@ -139,7 +156,8 @@ def _numeric_table(lines: list[str], first_number: int, label: str, what: str,
 
 def _integer_indices(values: np.ndarray, label: str) -> np.ndarray:
     """Vertex indices as int64; text formats give floats, which must be whole numbers."""
-    if values.dtype.kind == "f" and not np.array_equal(values, np.round(values)):
+    whole = np.all(np.abs(values) < 2**62) and np.array_equal(values, np.round(values))  # NaN, inf, 1e20: not
+    if values.dtype.kind == "f" and not whole:
         raise InputError(f"{label}: a face has a vertex index that is not a whole number")
     return values.astype(np.int64)
 
@@ -228,12 +246,16 @@ def _parse_ply(data: bytes, label: str) -> _Parsed:
     else:
         body = _BinaryPlyBody(data, header.byte_order, label)
     values, pos = {}, header.body_start if header.byte_order else 0
-    for element in header.elements:
-        if wanted <= values.keys():
-            break  # what follows (e.g. range_grid) is not needed
+    for element in header.elements:  # all of them, also those not needed (range_grid): the end is checked
         element_values, pos = _ply_element(body, element, pos, element.name in wanted)
         if element.name in wanted:
             values[element.name] = element_values
+    last = header.elements[-1]
+    if header.byte_order:
+        _check_binary_end(data, pos, label, last.count, last.noun)
+    elif pos < body.end:
+        line = data[:header.body_start].count(b"\n") + _line_of_token(data[header.body_start:], pos)
+        raise _trailing(label, f"line {line}", last.count, last.noun)
     points, normals = _points_and_normals(values["vertex"], "xyz", ("nx", "ny", "nz"), label, "vertices")
     warnings: list[str] = []
     triangles = None
@@ -267,6 +289,8 @@ def _ply_header(data: bytes, label: str) -> _PlyHeader:
     if not have_format:
         raise InputError(f"{label}: the PLY header has no 'format ascii|binary_little_endian|"
                          "binary_big_endian 1.0' line")
+    if len({element.name for element in elements}) < len(elements):
+        raise InputError(f"{label}: the PLY header declares an element twice")
     for element in elements:
         names = [p.name for p in element.properties]
         if len(set(names)) < len(names):
@@ -489,6 +513,9 @@ def _parse_pcd(data: bytes, label: str) -> _Parsed:
         tokens = data[start:].split()
         if len(tokens) < count * width:
             raise _truncated(label, count, "points", len(tokens) // width)
+        if len(tokens) > count * width:
+            line = data[:start].count(b"\n") + _line_of_token(data[start:], count * width)
+            raise _trailing(label, f"line {line}", count, "points")
         table = _floats(tokens[:count * width], label, "point data").reshape(count, width)
         offsets = np.cumsum([0] + [size for _, _, size in fields])
         columns = {name: table[:, offset:offset + size] for (name, _, size), offset in zip(fields, offsets)}
@@ -497,6 +524,7 @@ def _parse_pcd(data: bytes, label: str) -> _Parsed:
         if encoding == "binary":
             if len(data) - start < count * record.itemsize:
                 raise _truncated(label, count, "points", (len(data) - start) // record.itemsize)
+            _check_binary_end(data, start + count * record.itemsize, label, count, "points")
             table = np.frombuffer(data, record, count, start)
             columns = {name: table[name] for name, _, _ in fields}
         else:
@@ -535,11 +563,14 @@ def _pcd_header(data: bytes, label: str):
         for index, (name, size, kind, count) in enumerate(zip(names, sizes, types, counts)):
             unique = name if name not in {field[0] for field in fields} else f"{name}#{index}"  # "_" padding
             fields.append((unique, _PCD_TYPES[kind.upper(), size], int(count)))
-        points = int(entries["POINTS"][0]) if "POINTS" in entries else (
-            int(entries["WIDTH"][0]) * int(entries["HEIGHT"][0]))
-    except (KeyError, IndexError, ValueError):
+        grid = (int(entries["WIDTH"][0]), int(entries["HEIGHT"][0])) if "WIDTH" in entries else None
+        points = int(entries["POINTS"][0]) if "POINTS" in entries else grid[0] * grid[1]
+    except (KeyError, IndexError, ValueError, TypeError):
         raise InputError(f"{label}: the PCD header has an invalid or missing SIZE/TYPE/COUNT/"
                          "POINTS/WIDTH/HEIGHT entry") from None
+    if grid is not None and grid[0] * grid[1] != points:
+        raise InputError(f"{label}: the PCD header declares POINTS {points} but WIDTH {grid[0]} x HEIGHT "
+                         f"{grid[1]} = {grid[0] * grid[1]}")
     if points < 0 or any(count < 1 for _, _, count in fields):
         raise InputError(f"{label}: the PCD header declares a negative POINTS or a COUNT below 1")
     return fields, points, encoding, pos
@@ -555,6 +586,9 @@ def _pcd_decompressed(data: bytes, start: int, expected: int, label: str) -> byt
     block = data[start + 8:start + 8 + compressed_size]
     if len(block) < compressed_size:
         raise InputError(f"{label}: compressed data ends after {len(block)} of {compressed_size} bytes")
+    where = _binary_tail(data, start + 8 + compressed_size)
+    if where:
+        raise InputError(f"{label}: {where}: data continues after the compressed data; the file is corrupt")
     return _lzf_decompress(block, expected, label)
 
 
@@ -606,6 +640,8 @@ def _parse_text_cloud(data: bytes, label: str) -> _Parsed:
     if table.shape[1] < 3:
         raise InputError(f"{label}: the point lines have {table.shape[1]} columns, x y z needs 3")
     header = next((line for line in reversed(lines[:first]) if line.strip()), "")
+    if header.strip().isdigit():  # a point count (PTS, some XYZ writers): checked both ways
+        _check_point_count(int(header), table, lines, first, label)
     names = [name.strip('"\'').lower() for name in _FIELD_SEPARATORS.split(header.strip().lstrip("#/").strip())]
     warnings = []
     normals = None
@@ -617,6 +653,15 @@ def _parse_text_cloud(data: bytes, label: str) -> _Parsed:
             warnings.append(f"{label}: columns 4-6 are named {', '.join(names[3:6])} but are not unit "
                             "vectors; they were not used as normals")
     return _Parsed(table[:, :3], normals, warnings=tuple(warnings))
+
+
+def _check_point_count(declared: int, table: np.ndarray, lines: list[str], first: int, label: str) -> None:
+    if len(table) < declared:
+        raise _truncated(label, declared, "points", len(table))
+    if len(table) > declared:
+        numbers = [number for number, line in enumerate(lines[first:], first + 1)
+                   if _INLINE_COMMENT.split(line, 1)[0].strip()]
+        raise _trailing(label, f"line {numbers[declared]}", declared, "points")
 
 
 def _is_point_line(line: str) -> bool:
@@ -641,9 +686,12 @@ _STL_VERTEX = re.compile(r"\bvertex\s+(\S+)\s+(\S+)\s+(\S+)")
 
 def _parse_stl(data: bytes, label: str) -> _Parsed:
     declared = struct.unpack_from("<I", data, 80)[0] if len(data) >= 84 else None
-    if declared is not None and len(data) >= 84 + declared * STL_RECORD.itemsize:
+    size = None if declared is None else 84 + declared * STL_RECORD.itemsize
+    ascii = data.lstrip()[:5].lower() == b"solid" and b"\0" not in data
+    if size is not None and (len(data) == size or (len(data) > size and not ascii)):
+        _check_binary_end(data, size, label, declared, "triangles")
         corners = np.frombuffer(data, STL_RECORD, declared, 84)["corners"].reshape(-1, 3)
-    elif data.lstrip()[:5].lower() == b"solid" and b"\0" not in data:
+    elif ascii:
         corners = _ascii_stl_corners(data, label)
     elif declared is not None:
         raise _truncated(label, declared, "triangles", (len(data) - 84) // STL_RECORD.itemsize)
@@ -658,6 +706,15 @@ def _ascii_stl_corners(data: bytes, label: str) -> np.ndarray:
     facets, closed = len(_STL_FACET.findall(text)), text.count("endfacet")
     if facets != closed:
         raise InputError(f"{label}: the ASCII STL ends inside a facet (after {closed} complete ones)")
+    last = text.rfind("endsolid")
+    if last < 0:
+        raise InputError(f"{label}: the ASCII STL has no 'endsolid' line (the file is cut short after "
+                         f"{closed} facets?)")
+    after = text.find("\n", last)
+    tail = text[after:] if after >= 0 else ""
+    if tail.strip():
+        line = text.count("\n", 0, after + len(tail) - len(tail.lstrip())) + 1
+        raise InputError(f"{label}: line {line}: text after endsolid, the end of the last solid")
     corners = _STL_VERTEX.findall(text)
     if len(corners) != len(_STL_VERTEX_KEYWORD.findall(text)):
         raise InputError(f"{label}: a vertex line has fewer than three coordinates")
@@ -685,11 +742,17 @@ def _merged_vertices(corners: np.ndarray):
 _OBJ_VERTEX = re.compile(r"^[ \t]*v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)", re.M)
 _OBJ_VERTEX_KEYWORD = re.compile(r"^[ \t]*v[ \t]", re.M)
 _OBJ_FACE = re.compile(r"^[ \t]*f[ \t]+([^\r\n#]*)", re.M)
+_OBJ_STATEMENT = re.compile(r"^[ \t]*([^\s#]\S*)", re.M)
+# Every statement of the OBJ specification; what WorkCal does not use (texture, groups, curves) is skipped.
+_OBJ_KEYWORDS = frozenset("v vt vn vp f l p g o s mg mtllib usemtl usemap maplib lod bevel c_interp d_interp "
+                          "shadow_obj trace_obj ctech stech cstype deg bmat step curv curv2 surf parm trim hole "
+                          "scrv sp end con call csh".split())
 
 
 def _parse_obj(data: bytes, label: str) -> _Parsed:
     """v lines and f lines (v, v/vt, v//vn, v/vt/vn; negative = relative); all else is ignored."""
     text = _text(data, label)
+    _check_obj_statements(text, label)
     vertex_lines = list(_OBJ_VERTEX.finditer(text))
     if len(vertex_lines) != len(_OBJ_VERTEX_KEYWORD.findall(text)):
         raise InputError(f"{label}: a 'v' line has fewer than three coordinates")
@@ -712,6 +775,16 @@ def _parse_obj(data: bytes, label: str) -> _Parsed:
     warnings: list[str] = []
     triangles = _fan_triangles(indices, lengths, label, warnings)
     return _Parsed(points, triangles=triangles, warnings=tuple(warnings))
+
+
+def _check_obj_statements(text: str, label: str) -> None:
+    """Refuse a line that is no OBJ statement (numbers without a keyword, binary junk, another format)."""
+    unknown = set(_OBJ_STATEMENT.findall(text)) - _OBJ_KEYWORDS
+    if unknown:
+        first = next(m for m in _OBJ_STATEMENT.finditer(text) if m.group(1) in unknown)
+        line = text.count("\n", 0, first.start()) + 1
+        raise InputError(f"{label}: line {line}: {first.group(1)[:40]!r} is not an OBJ statement "
+                         "(v, vn, f, g, ...)")
 
 
 _OFF_KEYWORD = re.compile(r"(ST)?C?(N)?(4)?(n)?OFF")
@@ -754,6 +827,10 @@ def _parse_off(data: bytes, label: str) -> _Parsed:
     face_lines = lines[1 + vertex_count:1 + vertex_count + face_count]
     if len(face_lines) < face_count:
         raise _truncated(label, face_count, "faces", len(face_lines))
+    after = lines[1 + vertex_count + face_count:]
+    if after:
+        raise _trailing(label, f"line {after[0][0]}", *((face_count, "faces") if face_count else
+                                                          (vertex_count, "vertices")))
     normals = table[:, 3:6] if form.group(2) else None
     if not face_count:
         return _Parsed(table[:, :3], normals)

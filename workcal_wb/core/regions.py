@@ -15,8 +15,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from . import frames, pointops
-from .errors import InputError
-from .geometry import Cloud
+from .errors import InputError, NotFound
+from .geometry import Cloud, shape_kind
 from .match import match
 from .result import FAILED, MatchResult
 from .surface import SurfaceModel
@@ -72,11 +72,16 @@ def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, s
 
 def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
            seed: int = 0, progress=None) -> Located:
-    """Find the reference and the workpiece in a scene scan; InputError names what could not be found."""
+    """Find the reference and the workpiece in a scene scan; NotFound names what could not be found
+    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise)."""
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
         raise InputError(f"{scan.name}: only {len(valid)} valid points; a scene scan needs far more")
+    kind = shape_kind(points[valid])
+    if kind != "solid":
+        raise NotFound(f"{scan.name}: the scan points are {kind}; a scene scan shows the platform and the "
+                       "objects standing on it")
     rng = np.random.default_rng(seed)
     spacing = pointops.median_spacing(points[valid], seed=seed)
     warnings = []
@@ -92,10 +97,10 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
 
     report(0.1, f"looking for the reference {reference.name}")
     options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3)
-    reference_match = _first_match(scan, points, objects, labels, reference, options, "reference")
+    reference_match, rejected = _first_match(scan, points, objects, labels, reference, options, "reference")
     if reference_match is None:
-        raise InputError(f"reference object {reference.name}: not found in {scan.name} (no object standing on the "
-                         "platform matches its model); is the reference in view, and is its model the right one?")
+        raise NotFound(f"reference object {reference.name}: not found in {scan.name}: "
+                       + _why_not_found(points, objects, labels, reference, rejected, tolerance_mm, "reference"))
     on_reference = _on_model(points[objects], labels, reference, reference_match.matrix, max(2.0, 3 * spacing))
     if on_reference.touching:
         warnings.append(f"{scan.name}: the reference touches another object; its region is only the points "
@@ -104,11 +109,10 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
 
     report(0.3, f"looking for the workpiece {workpiece.name}")
     rest, rest_labels = objects[~on_reference.region], labels[~on_reference.region]
-    workpiece_match = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
+    workpiece_match, rejected = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
     if workpiece_match is None:
-        raise InputError(f"workpiece {workpiece.name}: not found in {scan.name}: no object left after removing the "
-                         f"platform and the reference matches its model (objects tried: "
-                         f"{len(_candidates(points, rest, rest_labels, workpiece))})")
+        raise NotFound(f"workpiece {workpiece.name}: not found in {scan.name}: "
+                       + _why_not_found(points, rest, rest_labels, workpiece, rejected, tolerance_mm, "workpiece"))
     # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
     on_workpiece = _on_model(points[rest], rest_labels, workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
     workpiece_idx = rest[on_workpiece.clusters]
@@ -140,6 +144,8 @@ def _platform(points: np.ndarray, spacing: float, rng: np.random.Generator) -> n
     normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
     length = np.linalg.norm(normals, axis=1)
     keep = length > 1e-9
+    if not keep.any():  # every sampled triple is collinear: there is no plane at all
+        return None
     normals, triples = normals[keep] / length[keep, None], triples[keep]
     offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
     counts = (np.abs(sample @ normals.T - offsets) < band).sum(axis=0)
@@ -187,17 +193,40 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
 
 
 def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str):
-    """Match the model against its candidate clusters in turn; the first trustworthy match wins."""
-    fallback = None
+    """Match the model against its candidate clusters in turn; the first trustworthy match wins.
+
+    Returns (the match or None, the best match rejected for its share of points within the tolerance
+    or None): a rejected match that explains its cluster says the tolerance is below the noise."""
+    fallback, rejected = None, None
     for members in _candidates(points, idx, labels, surface):
         result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
         if result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]:
+            if result.status != FAILED and (rejected is None or result.fitness > rejected.fitness):
+                rejected = result
             continue
         if result.ok:
-            return result
+            return result, rejected
         if result.status != FAILED and fallback is None:
             fallback = result
-    return fallback
+    return fallback, rejected
+
+
+def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, tolerance_mm: float, role: str) -> str:
+    """Why no object matched the model, as far as the objects' sizes and the best rejected match tell."""
+    if rejected is not None and rejected.fitness >= MIN_FITNESS[role]:
+        return (f"the best object fits the model with RMS {rejected.rms_mm:.3f} mm, but only "
+                f"{rejected.within_tolerance_pct:.0f}% of its points lie within the tolerance {tolerance_mm:g} mm "
+                f"(at least {MIN_WITHIN_TOLERANCE_PCT[role]:.0f}% needed): the tolerance seems to be below the "
+                "scan's noise; raise it")
+    sizes = sorted((Cloud(points[idx[labels == label]]).diagonal() for label in np.unique(labels)
+                    if np.sum(labels == label) >= MIN_CLUSTER_POINTS), reverse=True) if len(idx) else []
+    if not sizes:
+        return "no object is left standing on the platform; is it in view?"
+    if not any(SIZE_RATIO_RANGE[0] <= size / surface.diagonal <= SIZE_RATIO_RANGE[1] for size in sizes):
+        shown = ", ".join(f"{size:.4g}" for size in sizes[:5])
+        return (f"no object on the platform is the size of the model ({surface.diagonal:.4g} mm across; the objects "
+                f"are {shown} mm across): is the model in the unit it was read in?")
+    return "no object of its size matches the model; is it in view, and is its model the right one?"
 
 
 @dataclass

@@ -2,7 +2,8 @@
 
 report.html has inline CSS and its images embedded as base64 PNG (no scripts, no links, nothing
 fetched), so it can be mailed or archived on its own.  report.json is ``CalibrationResult.to_dict()``
-(it loads back with ``CalibrationResult.from_json``) plus the deviation statistics and the studies.
+with the regions as point counts (it loads back with ``CalibrationResult.from_json``) plus the
+deviation statistics and the studies.
 
 Both are built completely in memory and then written atomically, report.html last: a failure
 leaves the previous report (or none), never half a file.
@@ -24,7 +25,7 @@ import numpy as np
 from . import frames
 from .atomic import atomic_write_text
 from .deviation import deviation_stats, signed_deviations
-from .errors import InputError
+from .errors import OutputError
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult
 
 REPORT_FORMAT = "workcal-report"
@@ -65,7 +66,7 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
 
     workpiece_points: the workpiece region of the scan (N x 3, mm, in S) for the deviation map;
     workpiece_model: X-A (Cloud or SurfaceModel); studies: StudyResults (or their dicts) whose
-    summaries, targets and figures are added.  Raises InputError if the folder cannot be written.
+    summaries, targets and figures are added.  Raises OutputError if the folder cannot be written.
     """
     out = Path(out_dir)
     deviations = deviation_map(calibration, workpiece_points, workpiece_model)
@@ -73,7 +74,7 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
     study_dicts = [_study_dict(s) for s in studies]
     generated = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
 
-    data = calibration.to_dict()
+    data = calibration.to_dict(region_indices=False)
     data["deviation"] = deviation
     data["studies"] = study_dicts
     data["report"] = {"format": REPORT_FORMAT, "version": 1, "title": title, "generated": generated,
@@ -407,7 +408,7 @@ def _write(out: Path, files) -> None:
     """Each file atomically, in order (the HTML last, so its presence means the report is complete)."""
     try:
         out.mkdir(parents=True, exist_ok=True)
-        for path, text in files:
-            atomic_write_text(path, text)
     except OSError as exc:
-        raise InputError(f"{out}: cannot write the report ({exc.strerror or exc})") from exc
+        raise OutputError(f"{out}: cannot write the report ({exc.strerror or exc})") from None
+    for path, text in files:
+        atomic_write_text(path, text)

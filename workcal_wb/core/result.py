@@ -2,20 +2,34 @@
 
 Both serialise to JSON with lengths in mm and angles in degrees.  Derived numbers (inverse, Euler
 angles, Omega) are written for the reader but never stored: they are recomputed from the matrix.
+
+A result file is input like any other: ``from_dict`` checks every field's type (a result.json that
+is an array, or has gates that are not a list of gates, is an InputError naming the file, never a
+traceback in whoever reads it next).  ``to_json`` writes the scan's region indices (millions for a
+large scan) to a binary side file beside result.json, ``<stem>.regions.npz``, and result.json
+records their counts, which ``from_json`` checks both ways.
 """
 from __future__ import annotations
 
 import hashlib
+import io
 import json
+import math
 from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 
 from . import frames
 from .errors import InputError
+from .files import read_bytes
 
 OK, AMBIGUOUS, FAILED = "ok", "ambiguous", "failed"
 STATUSES = (OK, AMBIGUOUS, FAILED)
+CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 2  # version 2: region indices in a side file
+REGION_ROLES = ("workpiece", "reference", "platform")  # the regions that are scan point indices
+REGIONS_SUFFIX = ".regions.npz"
+_REGION_FILE_KEYS = ("counts", "indices_file")  # what result.json says of the side file
 
 
 def _jsonable(value):
@@ -33,6 +47,67 @@ def _jsonable(value):
 
 def _matrix(value, name):
     return None if value is None else frames.as_transform(value, name)
+
+
+# --- checking what a file says ------------------------------------------------------------------
+
+_NUMBER, _TEXT = (int, float), (str,)
+_KINDS = {"str": _TEXT, "float": _NUMBER, "int": (int,), "list": (list,), "dict": (dict,)}
+
+
+def _is(value, kinds) -> bool:
+    return isinstance(value, kinds) and not isinstance(value, bool)
+
+
+def _checked_fields(cls, data, source: str) -> dict:
+    """The fields of ``cls`` found in ``data``, each of the type its annotation names (str, float, int,
+    list, dict; others are checked by the class itself); a wrong type is an InputError."""
+    if not isinstance(data, dict):
+        raise InputError(f"{source}: expected a JSON object, found {_json_kind(data)}")
+    out = {}
+    for f in fields(cls):
+        if f.name not in data:
+            continue
+        value, kinds = data[f.name], _KINDS.get(f.type)
+        if kinds is not None and not _is(value, kinds):
+            raise InputError(f"{source}: {f.name} must be {_kind_words(kinds)}, found {_json_kind(value)}")
+        out[f.name] = value
+    return out
+
+
+def _json_kind(value) -> str:
+    if value is None:
+        return "null"
+    return {bool: "true/false", int: "a number", float: "a number", str: "a string", list: "an array",
+            dict: "an object"}.get(type(value), type(value).__name__)
+
+
+def _kind_words(kinds) -> str:
+    return {_NUMBER: "a number", _TEXT: "a string", (int,): "a whole number", (list,): "an array",
+            (dict,): "an object"}[kinds]
+
+
+def _check_items(values: list, kinds, source: str, name: str) -> None:
+    for value in values:
+        if not _is(value, kinds):
+            raise InputError(f"{source}: every entry of {name} must be {_kind_words(kinds)}, found {_json_kind(value)}")
+
+
+def _check_numbers(mapping: dict, source: str, name: str, keys=None) -> None:
+    """Values that must be numbers (all of them, or those whose key ``keys`` accepts)."""
+    for key, value in mapping.items():
+        if (keys is None or keys(key)) and not _is(value, _NUMBER):
+            raise InputError(f"{source}: {name}[{key!r}] must be a number, found {_json_kind(value)}")
+
+
+def _check_gates(gates: list, source: str) -> None:
+    _check_items(gates, (dict,), source, "quality_gates")
+    for gate in gates:
+        if not _is(gate.get("name", ""), _TEXT) or not isinstance(gate.get("passed", False), bool):
+            raise InputError(f"{source}: a quality gate needs a name (string) and passed (true/false)")
+        for key in ("value", "limit"):
+            if key in gate and not _is(gate[key], _NUMBER + _TEXT):
+                raise InputError(f"{source}: quality gate {gate.get('name')!r}: {key} must be a number or a string")
 
 
 @dataclass
@@ -82,9 +157,17 @@ class MatchResult:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict) -> "MatchResult":
-        names = {f.name for f in fields(cls)}
-        return cls(**{k: v for k, v in data.items() if k in names})
+    def from_dict(cls, data: dict, source: str = "match") -> "MatchResult":
+        values = _checked_fields(cls, data, source)
+        for name in ("percentiles_mm", "timings_s"):
+            _check_numbers(values.get(name, {}), source, name)
+        for name in ("warnings", "reasons"):
+            _check_items(values.get(name, []), _TEXT, source, name)
+        _check_items(values.get("candidates", []), (dict,), source, "candidates")
+        try:
+            return cls(**values)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{source}: {exc}") from None
 
     def summary(self) -> str:
         """A few lines for a terminal or the Report view."""
@@ -126,9 +209,11 @@ class CalibrationResult:
             raise ValueError(f"calibration status must be one of {STATUSES}, not {self.status!r}")
         self.W, self.U, self.V = (_matrix(m, n) for m, n in ((self.W, "W"), (self.U, "U"), (self.V, "V")))
         if isinstance(self.workpiece, dict):
-            self.workpiece = MatchResult.from_dict(self.workpiece)
+            self.workpiece = MatchResult.from_dict(self.workpiece, "workpiece match")
         if isinstance(self.reference, dict):
-            self.reference = MatchResult.from_dict(self.reference)
+            self.reference = MatchResult.from_dict(self.reference, "reference match")
+        self.regions = {k: np.asarray(v, dtype=np.int64) if k in REGION_ROLES and v is not None else v
+                        for k, v in self.regions.items()}
 
     @property
     def ok(self) -> bool:
@@ -155,11 +240,18 @@ class CalibrationResult:
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
-    def to_dict(self) -> dict:
-        out = {"format": "workcal-calibration", "version": 1, "units": {"length": "mm", "angle": "deg"}}
+    def to_dict(self, region_indices: bool = True) -> dict:
+        """Everything as JSON values; ``region_indices=False`` gives only how many points each region has."""
+        out = {"format": CALIBRATION_FORMAT, "version": CALIBRATION_VERSION, "units": {"length": "mm", "angle": "deg"}}
         for f in fields(self):
             value = getattr(self, f.name)
             out[f.name] = value.to_dict() if isinstance(value, MatchResult) else _jsonable(value)
+        roles = {k: v for k, v in self.regions.items() if k in REGION_ROLES and v is not None}
+        out["regions"] = {k: v for k, v in out["regions"].items() if k not in _REGION_FILE_KEYS + REGION_ROLES}
+        if region_indices:
+            out["regions"].update(_jsonable(roles))
+        else:  # read without its side file, a result still knows the counts
+            out["regions"]["counts"] = {k: len(v) for k, v in roles.items()} or self.regions.get("counts", {})
         for name in ("W", "U", "V"):
             M = getattr(self, name)
             out[f"{name}_pose"] = None if M is None else frames.describe(M)
@@ -167,37 +259,136 @@ class CalibrationResult:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict, source: str = "calibration") -> "CalibrationResult":
-        if data.get("format") != "workcal-calibration":
-            raise InputError(f"{source}: not a WorkCal calibration (missing \"format\": \"workcal-calibration\")")
-        names = {f.name for f in fields(cls)}
+    def from_dict(cls, data: dict, source: str = "calibration", regions_folder=None) -> "CalibrationResult":
+        """A result from JSON values, every field checked; region indices kept in a side file are read
+        from ``regions_folder`` (None: not read, the regions keep only their counts)."""
+        if not isinstance(data, dict) or data.get("format") != CALIBRATION_FORMAT:
+            raise InputError(f"{source}: not a WorkCal calibration (missing \"format\": \"{CALIBRATION_FORMAT}\")")
+        version = data.get("version", 1)
+        if not _is(version, (int,)) or not 1 <= version <= CALIBRATION_VERSION:
+            raise InputError(f"{source}: calibration format version {version!r}; this WorkCal reads versions "
+                             f"1 to {CALIBRATION_VERSION} (a newer WorkCal wrote it?)")
+        if "status" not in data:
+            raise InputError(f"{source}: has no status")
+        values = _checked_fields(cls, data, source)
+        _check_numbers(values.get("uncertainty", {}), source, "uncertainty", lambda key: key.endswith(("_mm", "_deg")))
+        for name in ("warnings", "reasons"):
+            _check_items(values.get(name, []), _TEXT, source, name)
+        _check_gates(values.get("quality_gates", []), source)
+        if not math.isfinite(values.get("tolerance_mm", 1.0)) or values.get("tolerance_mm", 1.0) <= 0:
+            raise InputError(f"{source}: tolerance_mm must be a positive number of mm")
+        for role in ("workpiece", "reference"):
+            if values.get(role) is not None and not isinstance(values[role], dict):
+                raise InputError(f"{source}: {role} must be a match (an object) or null, found {_json_kind(values[role])}")
+            if values.get(role) is not None:
+                values[role] = MatchResult.from_dict(values[role], f"{source}: {role} match")
+        scan_points = values.get("inputs", {}).get("scan_points")
+        values["regions"] = _read_regions(values.get("regions", {}), source, regions_folder,
+                                          scan_points if _is(scan_points, (int,)) else None)
         try:
-            return cls(**{k: v for k, v in data.items() if k in names})
+            return cls(**values)
         except (TypeError, ValueError) as exc:
-            raise InputError(f"{source}: {exc}") from exc
+            raise InputError(f"{source}: {exc}") from None
 
-    def to_json_text(self) -> str:
-        """The text ``to_json`` writes (``result_fingerprint`` hashes it)."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=True)
+    def to_json_text(self, indices_file: str | None = None) -> str:
+        """The text ``to_json`` writes (``result_fingerprint`` hashes it): the regions as counts and the
+        name of the side file that holds their indices (``indices_file``; default: the name the result
+        was read with, else result.regions.npz), so a result read back gives the same text."""
+        data = self.to_dict(region_indices=False)
+        if data["regions"]["counts"]:
+            data["regions"]["indices_file"] = (indices_file or self.regions.get("indices_file")
+                                               or "result" + REGIONS_SUFFIX)
+        return json.dumps(data, indent=2, allow_nan=True)
 
     def to_json(self, path) -> None:
-        from .atomic import atomic_write_text
+        """result.json, and the region indices beside it in ``<stem>.regions.npz`` (written first)."""
+        from .atomic import atomic_write_bytes, atomic_write_text
 
-        atomic_write_text(path, self.to_json_text())
+        path = Path(path)
+        side = path.with_name(path.stem + REGIONS_SUFFIX)
+        indices = {k: v for k, v in self.regions.items() if k in REGION_ROLES and v is not None}
+        if indices:
+            atomic_write_bytes(side, _npz_bytes(indices))
+        atomic_write_text(path, self.to_json_text(side.name))
 
     @classmethod
-    def from_json(cls, path) -> "CalibrationResult":
+    def from_json(cls, path, with_regions: bool = True) -> "CalibrationResult":
+        """Read a result file (and its region indices, unless ``with_regions`` is False: W alone)."""
+        path = Path(path)
+        return cls.from_text(read_bytes(path, "calibration file"), str(path),
+                             regions_folder=path.parent if with_regions else None)
+
+    @classmethod
+    def from_text(cls, text, source: str, regions_folder=None) -> "CalibrationResult":
+        """From JSON text (a file's bytes, or what a FreeCAD object stores)."""
         try:
-            with open(path, encoding="utf-8") as fh:
-                data = json.load(fh)
-        except OSError as exc:
-            raise InputError(f"{path}: cannot read calibration ({exc.strerror})") from exc
-        except json.JSONDecodeError as exc:
-            raise InputError(f"{path}: not valid JSON ({exc})") from exc
-        return cls.from_dict(data, str(path))
+            data = json.loads(text)
+        except (ValueError, RecursionError) as exc:  # JSONDecodeError, bad UTF-8, absurd nesting
+            raise InputError(f"{source}: not valid JSON ({exc})") from None
+        return cls.from_dict(data, source, regions_folder)
 
 
 def result_fingerprint(result: CalibrationResult) -> str:
     """The first 16 hex digits of the SHA-256 of the result's JSON: of result.json's bytes as ``to_json``
     writes them, so every exported program names the result it came from."""
     return hashlib.sha256(result.to_json_text().encode("utf-8")).hexdigest()[:16]
+
+
+# --- region indices -----------------------------------------------------------------------------
+
+def _npz_bytes(indices: dict) -> bytes:
+    """The index arrays as a compressed .npz, 32-bit where they fit."""
+    arrays = {role: np.asarray(v, dtype=np.int64) for role, v in indices.items()}
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **{role: v.astype(np.int32) if v.size == 0 or v.max() < 2**31 else v
+                                   for role, v in arrays.items()})
+    return buffer.getvalue()
+
+
+def _read_regions(regions, source: str, folder, scan_points: int | None) -> dict:
+    """Regions as {role: int64 indices, other keys as they are}: inline lists (version 1, FreeCAD
+    documents) or the side file a version 2 result.json names, with its counts checked both ways."""
+    if not isinstance(regions, dict):
+        raise InputError(f"{source}: regions must be an object, found {_json_kind(regions)}")
+    regions = dict(regions)
+    counts, name = regions.get("counts"), regions.get("indices_file")
+    if name is not None and not (_is(name, _TEXT) and Path(name).name == name and isinstance(counts, dict)):
+        raise InputError(f"{source}: regions.indices_file must be a file name beside it, with regions.counts")
+    if name is not None and folder is not None:
+        regions.update(_side_file_indices(Path(folder) / name, counts, source))
+        del regions["counts"]  # the arrays say it now
+    for role in REGION_ROLES:
+        if role in regions:
+            regions[role] = _indices(regions[role], source, scan_points, role)
+    return regions
+
+
+def _indices(values, source: str, scan_points: int | None, role: str) -> np.ndarray:
+    try:
+        array = np.asarray(values)
+    except (ValueError, TypeError, OverflowError):  # ragged lists, absurd numbers
+        array = None
+    if array is None or array.ndim != 1 or (len(array) and array.dtype.kind not in "iu"):
+        raise InputError(f"{source}: the {role} region must be a list of whole point indices")
+    array = array.astype(np.int64)
+    if len(array) and (array.min() < 0 or (scan_points is not None and array.max() >= scan_points)):
+        raise InputError(f"{source}: {role} indices outside the scan's {scan_points} points")
+    return array
+
+
+def _side_file_indices(path: Path, counts: dict, source: str) -> dict:
+    data = read_bytes(path, "region index file")
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as archive:
+            arrays = {role: archive[role] for role in archive.files}
+    except Exception as exc:  # numpy's npz/npy parsing raises many kinds on corrupt data
+        raise InputError(f"{path}: cannot be read as region indices ({type(exc).__name__}: {exc})") from None
+    unlisted = sorted(arrays.keys() - counts.keys())
+    if unlisted:
+        raise InputError(f"{path}: holds {unlisted[0]} indices that result.json does not list")
+    for role, count in counts.items():
+        if role not in arrays:
+            raise InputError(f"{path}: has no {role} indices; {source} says {count}")
+        if len(arrays[role]) != count:
+            raise InputError(f"{path}: holds {len(arrays[role])} {role} indices, result.json says {count}")
+    return arrays

@@ -1,12 +1,17 @@
 """Length units at file boundaries.  Inside WorkCal every length is a millimetre."""
 from __future__ import annotations
 
+import numpy as np
+
 from .errors import InputError
 
 MM_PER_UNIT = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "um": 0.001}
 
 # A workpiece, reference block or toolpath lies between these sizes; outside them the unit is suspect.
 PLAUSIBLE_EXTENT_MM = (1.0, 20000.0)
+# The size of a cloud is that of its bulk (the box from the 1st to the 99th percentile); a point
+# farther than this many bulk sizes from the bulk's centre is a stray point, not a sign of a unit.
+STRAY_DISTANCE = 10.0
 
 
 def mm_per_unit(units: str) -> float:
@@ -16,12 +21,29 @@ def mm_per_unit(units: str) -> float:
         raise InputError(f"unknown length unit {units!r}; use one of {', '.join(MM_PER_UNIT)}") from None
 
 
-def extent_warning(extent_mm: float, name: str, units: str) -> str | None:
-    """A warning when an object's size in mm says the file was read with the wrong unit."""
+def extent_warnings(points: np.ndarray, name: str, units: str, unit_option: str = "unit") -> list[str]:
+    """Warnings when a cloud's size in mm says the file was read with the wrong unit, or when a few
+    points lie far from all the others (which says nothing about the unit).  ``unit_option`` is how
+    the caller's user sets the unit ("--model-units" on the command line), for the hint."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(points) < 2:
+        return []
+    low_corner, high_corner = np.percentile(points, [1, 99], axis=0)
+    bulk = float(np.linalg.norm(high_corner - low_corner))
+    warnings = []
+    with np.errstate(over="ignore", invalid="ignore"):
+        distance = np.linalg.norm(points - np.median(points, axis=0), axis=1)
+    stray = distance > STRAY_DISTANCE * max(bulk, 1e-9)
+    if stray.any():
+        warnings.append(f"{name}: {int(stray.sum())} of {len(points)} points lie far from all the others (up to "
+                        f"{float(distance[stray].max()):.4g} mm away, the rest is {bulk:.4g} mm across): stray "
+                        "points or a corrupt file?")
     low, high = PLAUSIBLE_EXTENT_MM
-    if 0 < extent_mm < low:
-        hint = "it is probably in metres: read it with units='m'" if extent_mm * 1000 >= low else "check its unit"
-        return f"{name}: only {extent_mm:.4g} mm across when read as {units}; {hint}"
-    if extent_mm > high:
-        return f"{name}: {extent_mm / 1000:.4g} m across when read as {units}; check its unit (micrometres?)"
-    return None
+    if 0 < bulk < low:
+        hint = (f"it is probably in metres: read it with {unit_option} m" if bulk * 1000 >= low else
+                f"check its unit ({unit_option})")
+        warnings.append(f"{name}: only {bulk:.4g} mm across when read as {units}; {hint}")
+    elif bulk > high:
+        warnings.append(f"{name}: {bulk / 1000:.4g} m across when read as {units}; check its unit ({unit_option}; "
+                        "micrometres?)")
+    return warnings

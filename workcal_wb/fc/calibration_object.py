@@ -157,17 +157,12 @@ def toolpath_points(obj) -> np.ndarray:
 
 
 def options_from(tolerance_mm=None, method=None, seed=None, resamples=None) -> CalibrationOptions:
-    """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors."""
+    """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors
+    (CalibrationOptions checks them)."""
     tolerance_mm = prefs.get("ToleranceMm") if tolerance_mm is None else float(tolerance_mm)
     method = prefs.get("Method") if method is None else str(method)
     seed = prefs.get("Seed") if seed is None else int(seed)
     resamples = prefs.get("Resamples") if resamples is None else int(resamples)
-    if not (np.isfinite(tolerance_mm) and tolerance_mm > 0):
-        raise InputError(f"tolerance must be a positive number of mm, not {tolerance_mm}")
-    if method not in METHODS:
-        raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if resamples < 1:
-        raise InputError(f"resamples must be at least 1, not {resamples}")
     return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples)
 
 
@@ -289,7 +284,7 @@ def result_of(obj) -> CalibrationResult:
         raise InputError(f"{_label(obj)}: not a WorkCal calibration")
     if not obj.ResultJson:
         raise InputError(f"{_label(obj)}: the calibration has not been computed yet")
-    return CalibrationResult.from_dict(json.loads(obj.ResultJson), f"calibration {obj.Label!r}")
+    return CalibrationResult.from_text(obj.ResultJson, f"calibration {obj.Label!r}")
 
 
 def is_calibration(obj) -> bool:

@@ -31,7 +31,7 @@ import Points
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
-from workcal_wb.core.units import extent_warning, mm_per_unit
+from workcal_wb.core.units import extent_warnings, mm_per_unit
 from workcal_wb.fc import init as fc_init
 from workcal_wb.fc.placements import matrix_of
 from workcal_wb.fc.proxies import Proxy
@@ -329,9 +329,7 @@ def _read_with_freecad(path: str, units: str) -> Cloud:
         if previous is not None:
             FreeCAD.setActiveDocument(previous.Name)
     cloud = checked(Cloud(points * scale, name=os.path.basename(path)))
-    warning = extent_warning(cloud.diagonal(), cloud.name, units)
-    if warning:
-        cloud.warnings.append(warning)
+    cloud.warnings += extent_warnings(cloud.points, cloud.name, units)
     return cloud
 
 

@@ -1,0 +1,78 @@
+"""Argument types shared by the subcommands: every number finite and in range, every input an existing
+regular file, checked by argparse before any work starts (a bad value exits 2 naming the option)."""
+from __future__ import annotations
+
+import argparse
+import math
+
+from workcal_wb.core.errors import InputError
+from workcal_wb.core.files import checked_input
+
+
+def _number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    return _checked(value, math.isfinite(value), "a finite number", text)
+
+
+def _whole(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+
+
+def _checked(value, ok: bool, words: str, text: str):
+    if not ok:
+        raise argparse.ArgumentTypeError(f"must be {words}, got {text!r}")
+    return value
+
+
+def finite(text: str) -> float:
+    """Any finite number (coordinates, angles)."""
+    return _number(text)
+
+
+def positive(text: str) -> float:
+    """A finite number > 0 (tolerances, sizes, speeds)."""
+    value = _number(text)
+    return _checked(value, value > 0, "a number > 0", text)
+
+
+def non_negative(text: str) -> float:
+    """A finite number >= 0 (noise)."""
+    value = _number(text)
+    return _checked(value, value >= 0, "a number >= 0", text)
+
+
+def seed(text: str) -> int:
+    """A random seed: a whole number from 0 to 2**63 - 1 (what numpy's generators take)."""
+    value = _whole(text)
+    return _checked(value, 0 <= value < 2**63, "a whole number from 0 to 2**63 - 1", text)
+
+
+def count(text: str) -> int:
+    """A whole number >= 1 (runs, positions)."""
+    value = _whole(text)
+    return _checked(value, value >= 1, "at least 1", text)
+
+
+def envelope(text: str):
+    """A work envelope "xmin,ymin,zmin,xmax,ymax,zmax" in mm."""
+    from workcal_wb.core.toolpath import Envelope
+
+    try:
+        return Envelope.parse(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def input_file(text: str) -> str:
+    """An existing, readable regular file (not a folder, pipe or device)."""
+    try:
+        checked_input(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
