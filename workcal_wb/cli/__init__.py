@@ -113,12 +113,17 @@ def main(argv=None) -> int:
     if not hasattr(args, "run"):
         parser.print_help()
         return EXIT_BAD_INPUT
+    # SIGINT and SIGTERM unwind the run (temporary files removed); past a file-size limit a write fails
+    # (exit 3) instead of killing the process.  Set here, not left to the interpreter: FreeCAD 1.0's
+    # freecadcmd starts Python with SIGXFSZ at its default (kill) and SIGINT not raising.
+    wanted = {signal.SIGTERM: _stop, signal.SIGINT: _stop, signal.SIGXFSZ: signal.SIG_IGN}
     handles_signals = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _stop) if handles_signals else None
+    previous = {signum: signal.signal(signum, handler) for signum, handler in wanted.items()} if handles_signals else {}
     try:
         return args.run(args)
     except KeyboardInterrupt as exc:
-        print(f"workcal {args.command}: {'interrupted' if not isinstance(exc, Stopped) else 'terminated'}; "
+        stopped_by = getattr(exc, "signum", signal.SIGINT)
+        print(f"workcal {args.command}: {'interrupted' if stopped_by == signal.SIGINT else 'terminated'}; "
               "outputs are as before the run", file=sys.stderr)
         return exit_status(exc)
     except WorkCalError as exc:
@@ -131,5 +136,5 @@ def main(argv=None) -> int:
             traceback.print_exc()
         return EXIT_INTERNAL_ERROR
     finally:
-        if handles_signals:
-            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
