@@ -74,7 +74,7 @@ CANDIDATE_FLOOR = 0.7
 POLISH_ITERATIONS = 2
 # The verdict refines the best pose again from this many times its final gate, on this many points
 # (see Judge.rank).
-WIDER_GATE, WIDER_POINTS = 4.0, 500
+WIDER_GATE, WIDER_POINTS = 8.0, 500
 # Patches the scan's noise is measured on, points the statistics of the verdict are taken over (a
 # random subset: percentages to about half a percent), and points poses are weighed on (a few per
 # view cell) unless the call is close (see Judge._level).
@@ -113,6 +113,13 @@ VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
 # scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
 # misplaced (or another object lies flush with the part): the match is ambiguous.
 MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.05
+# Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
+# shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
+THIN_WALL_NOISES = 5.0
+# A pose whose outline, seen from the sensor, holds more than this share of scan pixels whose points
+# lie behind its surface, inside the part (within OFF_BAND_GATES evidence gates: further behind they
+# are hidden, a contradiction), leaves a large share of the scan unexplained: ambiguous.
+MAX_OFF, OFF_BAND_GATES = 0.1, 10.0
 
 
 def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOptions = MatchOptions(),
@@ -307,14 +314,22 @@ def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
 
 def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
     """The best pose turned by the model's near-symmetric turns (surface.flips: half turns about its
-    principal axes, quarter turns of a near-square), refined where they fit at all.
+    principal axes, quarter turns of a near-square, each refined into the model's best self-map) and
+    by half turns of the matched patch about its own principal axes, refined where they fit at all.
 
     These are the poses a nearly symmetric part is mistaken for (turned over, end over end), and a
-    feature search can miss them when the part's faces look alike, so they are always tried.
+    feature search can miss them when the part's faces look alike, so they are always tried.  The
+    patch's own half turns catch a scan laid inside out on a face (a flat face fits both ways; its
+    edges and the sides beyond tell which).
     """
-    if len(surface.flips) == 0:
-        return []
-    turned = surface.flips @ best.T
+    moved = frames.apply(best.T, medium)
+    on_model = surface.nearest_cell(moved, best.gate)[2]
+    patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
+    from .symmetry import principal_axes, turn
+
+    centre, axes, _ = principal_axes(patch, np.ones(len(patch)))
+    turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
+    turned = turns @ best.T
     scores = inlier_scores(medium, surface, np.concatenate([best.T[None], turned]), best.gate)
     return [coarse_to_fine([medium], surface, T, gate, surface.spacing)
             for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
@@ -333,11 +348,14 @@ def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: f
 class Judge:
     """Weighs poses by their view evidence (visibility.evidence) on the verdict's scan points.
 
-    The viewpoint is the one given, or estimated once from the best pose: the matched surface faces
-    the sensor, so it sits along the middle of the matched model normals (visibility.viewing_direction),
-    in the scan's frame, where every pose is judged from the same place.  A scan whose matched
-    normals face every way (views merged into one cloud) has no viewpoint: its poses are weighed by
-    the scan points on the model.
+    All poses are judged from one viewpoint in the scan's frame, so their evidence compares cell by
+    cell: the one given, or else the one implied by the pose that puts the most scan points on the
+    model: the surface it matches faces the sensor, so the sensor sits along the middle of the
+    matched model normals (visibility.viewing_direction).  (A pose that lays a scan inside out on a
+    flat face implies the opposite side; it explains fewer points than the right one, the scan's
+    edges and sides beyond the face, so it does not choose the viewpoint when the right pose is
+    there.)  A scan whose matched normals face every way (views merged into one cloud) has no
+    viewpoint: its poses are weighed by the scan points on the model.
     """
 
     def __init__(self, sample: np.ndarray, surface: SurfaceModel, probes, spacing: float,
@@ -347,8 +365,8 @@ class Judge:
         self.probes, self.probe_noise = probes  # points the scan's noise was measured about, and the noise there
         self.scan_noise = float(np.median(self.probe_noise))
         self.noise = float("nan")  # what residuals scatter by: the noise of the scan (on the part) and the model
-        self.view, self.viewpoint, self.viewing_from = None, {"position_mm": None, "source": "none"}, None
-        self.gate = self.depth_margin = float("nan")
+        self.gate = float("nan")
+        self.viewpoint, self.source, self.view = None, "none", None
         self._level(fine=False)
 
     def _level(self, fine: bool) -> None:
@@ -356,16 +374,23 @@ class Judge:
         a view with cells about a scan spacing wide (to tell near-symmetric poses apart)."""
         count = len(self.all_points) if fine else min(len(self.all_points), EVIDENCE_POINTS)
         self.sample = self.all_points[:count]
-        self.spacing = self.all_spacing * np.sqrt(len(self.all_points) / count)
-        self.view_samples = self.surface.view_order[:VIEW_SAMPLES_FINE if fine else VIEW_SAMPLES]
         self.fine = fine
+        spacing = self.all_spacing * np.sqrt(len(self.all_points) / count)
+        self.view_samples = self.surface.view_order[:VIEW_SAMPLES_FINE if fine else VIEW_SAMPLES]
+        model_spacing = self.surface.spacing * np.sqrt(len(self.surface.points) / len(self.view_samples))
+        self.pixel = max(PIXEL_SCAN_SPACINGS * spacing, PIXEL_MODEL_SPACINGS * model_spacing,
+                         spacing * np.sqrt(count / MAX_VIEW_PIXELS))
+        if self.viewpoint is not None:
+            self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
     def rank(self, best, rivals, polish, widen):
         """(best state, [{"T", "evidence", "z"}, best first]): the poses not equivalent under the
-        model's symmetries, weighed by view evidence.  A pose whose evidence is significantly above
-        the best's becomes the best (``polish`` finishes it like the best).  The best is then refined
-        again from a wider gate (``widen``): a fit can stop an edge's width off, its edge points
-        dropped as outliers, and from further out it slides home."""
+        model's symmetries, weighed by view evidence.  Every pose is refined again from a wider gate
+        first (``widen``): a fit can stop an edge's width off, its edge points dropped as outliers,
+        and from further out it slides home.  A pose whose evidence is significantly above the best's
+        becomes the best (``polish`` finishes it like the best, and it is widened again)."""
+        if self.options.method == "robust":  # each rival slides home too, or it is judged off its best
+            rivals = [widen(r) for r in rivals]
         rivals = self._distinct_under_symmetry(best, rivals)
         # The scan's noise where it lies on the model: clutter and stray points scatter differently.
         on_part = self.surface.nearest_cell(frames.apply(best.T, self.probes), best.gate)[2]
@@ -374,15 +399,13 @@ class Judge:
         self.noise = float(np.hypot(self.scan_noise, self.surface.noise_mm))
         sigma = best.sigma if np.isfinite(best.sigma) else self.noise
         self.gate = EVIDENCE_SIGMAS * max(sigma, self.noise, 1e-6)
-        lookup = self._lookup(best.T)
-        self.view = self._view(best.T, *lookup)
         poses = [best] + rivals
-        weighed = [self.evidence(best.T, lookup)] + [self.evidence(p.T) for p in rivals]
-        if any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) < CLOSE_CALL * self.options.rival_significance
-               for e in weighed[1:]):
+        lookups = [self._lookup(p.T) for p in poses]
+        self._choose_view(poses, lookups)
+        weighed = [self.evidence(p.T, lookup) for p, lookup in zip(poses, lookups)]
+        if any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
+               < CLOSE_CALL * self.options.rival_significance for e in weighed[1:]):
             self._level(fine=True)  # a close call: weigh again, finely
-            if self.viewing_from is not None:
-                self.view = self._scan_view(*self.viewing_from)
             weighed = [self.evidence(p.T) for p in poses]
         if self.options.method == "robust":
             top = int(np.argmax([e.score for e in weighed]))
@@ -420,43 +443,35 @@ class Judge:
         _, idx, found = self.surface.nearest_cell(moved, self.gate + self.surface.spacing)
         return idx, found, np.where(found, np.abs(self.surface.plane_residuals(moved, idx)), self.gate)
 
-    def _view(self, T: np.ndarray, idx: np.ndarray, found: np.ndarray, residuals: np.ndarray):
-        """The scan seen from the viewpoint (given, or estimated from the matched normals), or None."""
-        matched = found & (residuals < self.gate)
+    def _choose_view(self, poses, lookups) -> None:
+        """The viewpoint (given, or implied by the pose with the most scan points on the model) and
+        the scan seen from it; none when the matched normals face every way."""
+        top = int(np.argmax([np.sum(found & (r < self.gate)) for _, found, r in lookups]))
+        idx, found, r = lookups[top]
+        matched = found & (r < self.gate)
         points = self.sample[matched]
         if len(points) < MIN_SCAN_POINTS:
-            return None
-        normals = self.surface.normals[idx[matched]] @ T[:3, :3]  # model normals in the scan's frame
-        centre = points.mean(axis=0)
+            return
+        normals = self.surface.normals[idx[matched]] @ poses[top].T[:3, :3]  # model normals in the scan's frame
         given = self.options.viewpoint
         if given is not None:
             away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
             if away <= MAX_FACING_AWAY:
-                return self._scan_view(np.asarray(given, float), centre, "given")
+                self._set_view(np.asarray(given, float), points.mean(axis=0), "given")
+                return
             self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
                                  f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
                                  "estimated from the scan instead")
-        direction = visibility.viewing_direction(normals)
         extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-        viewpoint = centre + VIEW_DISTANCE_EXTENTS * extent * direction
+        viewpoint = points.mean(axis=0) + VIEW_DISTANCE_EXTENTS * extent * visibility.viewing_direction(normals)
         away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
-        if away > MAX_FACING_AWAY:
-            self.viewpoint = {"position_mm": None, "source": "none",
-                              "note": f"{away:.0%} of the matched surface faces away from any one viewpoint (views "
-                                      "merged into one cloud?): poses weighed by the scan points on the model, "
-                                      "without visibility"}
-            return None
-        return self._scan_view(viewpoint, centre, "estimated from the matched surface: along the middle of its "
-                                                  f"normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
+        if away <= MAX_FACING_AWAY:
+            self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
+                                                           f"of its normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
 
-    def _scan_view(self, viewpoint, centre, source: str):
-        self.viewing_from = (viewpoint, centre, source)
-        model_spacing = self.surface.spacing * np.sqrt(len(self.surface.points) / len(self.view_samples))
-        pixel = max(PIXEL_SCAN_SPACINGS * self.spacing, PIXEL_MODEL_SPACINGS * model_spacing,
-                    self.spacing * np.sqrt(len(self.sample) / MAX_VIEW_PIXELS))
-        self.depth_margin = self.gate + 2 * pixel
-        self.viewpoint = {"position_mm": viewpoint.tolist(), "source": source, "pixel_mm": float(pixel)}
-        return visibility.ScanView.of(self.sample, visibility.View(viewpoint, centre, pixel))
+    def _set_view(self, viewpoint, target, source: str) -> None:
+        self.viewpoint, self.target, self.source = viewpoint, target, source
+        self.view = visibility.ScanView.of(self.sample, visibility.View(viewpoint, target, self.pixel))
 
     def evidence(self, T: np.ndarray, lookup=None) -> visibility.Evidence:
         """The view evidence of pose T (scan -> model); without a view, each scan point's weight."""
@@ -464,12 +479,30 @@ class Judge:
         weights = np.clip(1 - (r / self.gate) ** 2, 0, 1)
         if self.view is None:
             return visibility.Evidence(weights, 0, 0, int((weights > 0).sum()))
-        viewpoint = self.view.view.viewpoint
-        normals = self.surface.normals[idx] @ T[:3, :3]
-        weights[visibility.facing(self.sample, normals, viewpoint) <= visibility.FACING_COS] = 0.0
+        weights[visibility.facing(self.sample, self.surface.normals[idx] @ T[:3, :3], self.viewpoint)
+                <= visibility.FACING_COS] = 0.0
         samples = self.view_samples
         return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
-                                   self.surface.normals[samples] @ T[:3, :3], self.depth_margin)
+                                   self.surface.normals[samples] @ T[:3, :3], self.gate, self.gate + 2 * self.pixel,
+                                   OFF_BAND_GATES * self.gate)
+
+    def wall_thickness(self, T: np.ndarray, evidence: visibility.Evidence) -> float:
+        """Median thickness of the part where pose T explains the view (mm; inf without a view)."""
+        if self.view is None:
+            return float("inf")
+        samples = self.view_samples
+        thickness = visibility.wall_thickness(self.view.view, frames.apply(frames.invert(T), self.surface.points[samples]),
+                                              self.surface.normals[samples] @ T[:3, :3])[self.view.cells]
+        seen = thickness[evidence.cells > 0.5]
+        return float(np.median(seen)) if len(seen) else float("inf")
+
+    def viewpoint_info(self) -> dict:
+        """Where the poses were judged from, and how that viewpoint was found (for the result)."""
+        if self.view is None:
+            return {"position_mm": None, "source": "none",
+                    "note": "the matched surface faces every way (views merged into one cloud?): poses weighed by "
+                            "the scan points on the model, without visibility"}
+        return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
 
 
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
@@ -541,6 +574,15 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
                        f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm): the part may be nearly symmetric; see "
                        "candidates")
+    if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
+        reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
+                       f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
+                       "the scan unexplained")
+    thickness = judge.wall_thickness(T, judged[0]["evidence"]) if status == OK else float("inf")
+    if thickness < THIN_WALL_NOISES * judge.noise:
+        reasons.append(f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
+                       f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
+                       "cannot be told apart")
     if status == OK and view.get("continued_pct", 0.0) > 100 * MAX_CONTINUED:
         reasons.append(f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
                        f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
@@ -560,7 +602,7 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
         gate_mm=float(gate), n_inliers=int(round(fitness * len(scan))), iterations=int(best.iterations),
         time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, noise_mm=float(noise),
-        viewpoint=judge.viewpoint, view=view, symmetries=_symmetry_list(surface), **result)
+        viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), **result)
 
 
 def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
@@ -591,6 +633,7 @@ def _view_summary(evidence: visibility.Evidence, judge: Judge) -> dict:
     if judge.view is not None and involved.any():
         summary["contradicted_pct"] = float(100 * np.mean(evidence.cells[involved] <= -0.5))
         summary["continued_pct"] = float(100 * evidence.continued / max(evidence.outline, 1))
+        summary["off_pct"] = float(100 * evidence.off / max(evidence.inside, 1))
     return summary
 
 

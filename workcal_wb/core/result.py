@@ -238,6 +238,7 @@ class CalibrationResult:
                 lines.append(f"  {role}: {m.status}, RMS {m.rms_mm:.3f} mm, mean Hausdorff "
                              f"{m.mean_directed_hausdorff_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
                              f"{m.tolerance_mm} mm, {m.n_inliers} points")
+                lines += [f"  {role} model symmetry: {s['description']}" for s in m.symmetries]
         for key, words in (("toolpath_bound_mm", "at the toolpath"), ("surface_bound_mm", "at the workpiece surface")):
             if key in self.uncertainty:
                 lines.append(f"  uncertainty {words}: {self.uncertainty[key]:.4f} mm "

@@ -32,6 +32,8 @@ MISSING_COS = 0.5
 # Holes in a scan's footprint up to about twice this many pixels across are closed: the sensor saw
 # all around them, so the model surface it should have seen there is missing.
 CLOSE_PIXELS = 3
+# A scan pixel inside the model's outline is off the model when its points' mean weight is at most this.
+OFF_WEIGHT = 0.25
 # The model surface is flat around a pixel when the normals there agree within this angle.
 FLAT_DEG = 3.0
 # A pixel's evidence: +weight for scan points on the visible model surface, HIDDEN for a scan point
@@ -112,6 +114,19 @@ def front(view: View, points: np.ndarray, normals: np.ndarray):
     return nearest, index
 
 
+def wall_thickness(view: View, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Per pixel of the window, the thickness of the wall the sensor looks at: how far behind the
+    surface seen there the nearest surface facing away lies, across the wall (along its normal, not
+    the slanted ray); inf where there is none."""
+    near, index = front(view, points, normals)
+    back, _ = front(view, points, -normals)
+    cos = np.ones(len(near))
+    seen = index >= 0
+    cos[seen] = facing(points[index[seen]], normals[index[seen]], view.viewpoint)
+    with np.errstate(invalid="ignore"):
+        return np.where(back > near, (back - near) * cos, np.inf)
+
+
 def expected_surface(points: np.ndarray, normals: np.ndarray, viewpoint, pixel_mm: float,
                      depth_margin: float | None = None) -> np.ndarray:
     """Which samples of a surface (points with unit outward normals, one frame) a sensor at
@@ -173,6 +188,9 @@ class Evidence:
     explained: int  # scan points on the model's visible surface
     continued: int = 0  # scan pixels just past the model's outline that continue its surface
     outline: int = 0  # pixels on the model's outline in the view
+    inside: int = 0  # scan pixels inside the model's outline
+    off: int = 0  # of those, pixels whose scan points lie behind the model's surface (inside the part)
+    viewpoint: np.ndarray | None = None  # where the pose was judged from
 
     @property
     def score(self) -> float:
@@ -193,10 +211,12 @@ def _around(image: np.ndarray, kind: str) -> np.ndarray:
 
 
 def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, model_normals: np.ndarray,
-             depth_margin: float) -> Evidence:
+             gate: float, depth_margin: float, off_band: float) -> Evidence:
     """The evidence of one pose: ``weights`` (per scan point, in [0, 1]) say how well each scan point
     lies on a model sample facing the viewpoint; ``model_points``/``model_normals`` are the model's
-    view samples placed in the scan's frame by the pose.
+    view samples placed in the scan's frame by the pose.  A scan pixel inside the model's outline
+    whose points lie more than ``gate`` behind its surface, but less than ``off_band``, is off the
+    model (see Evidence.off); in front of it they may be an occluder.
 
     Against the pose count: a scan point more than ``depth_margin`` behind the model's front surface
     (over its whole 3 x 3 neighbourhood: the model would hide it), an empty footprint pixel with no
@@ -231,8 +251,15 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     continued = _continued(scan, cells, index, (cos > MISSING_COS) & flat, model_points, model_normals, depth_margin)
     cells[continued] = MISSING
     outline = model_there & ~_around(model_there.reshape(rows, cols), "all").ravel()
+    # Off the model: scan pixels inside its outline whose points lie behind its surface, within the
+    # band (further behind they would be hidden anyway; in front they may be something in the way).
+    inside = seen & model_there
+    with np.errstate(invalid="ignore"):
+        behind = scan.nearest - nearest
+    off = inside & (cells <= OFF_WEIGHT) & (behind > gate) & (behind <= off_band)
     return Evidence(cells[scan.cells], int(hidden.sum()), int(missing[scan.cells].sum()),
-                    int(((weights > 0) & ~hidden).sum()), int(continued.sum()), int(outline.sum()))
+                    int(((weights > 0) & ~hidden).sum()), int(continued.sum()), int(outline.sum()),
+                    int(inside.sum()), int(off.sum()))
 
 
 def _flat(index: np.ndarray, normals: np.ndarray, rows: int, cols: int) -> np.ndarray:
@@ -314,8 +341,10 @@ def _cone(axis: np.ndarray, step_deg: float, rings: int) -> np.ndarray:
 
 
 def compare(best: np.ndarray, rival: np.ndarray, floor: float) -> float:
-    """How many standard errors the total of ``best`` lies above that of ``rival`` (paired per
-    cell); ``floor`` is the least variance of one cell's difference (sampling of model and scan)."""
+    """How many standard errors the total evidence of ``best`` lies above that of ``rival`` (per
+    view cell, both from one view, so paired cell by cell); ``floor`` is the least variance of one
+    cell's difference (sampling of model and scan), counted over the cells either pose covers."""
     d = best - rival
-    spread = np.sum((d - d.mean()) ** 2) + len(d) * floor
+    involved = int(np.count_nonzero((best != 0) | (rival != 0)))
+    spread = float(np.sum((d - d.mean()) ** 2)) + involved * floor
     return float(d.sum() / np.sqrt(max(spread, 1e-12)))
