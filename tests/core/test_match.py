@@ -196,6 +196,8 @@ def test_bad_input_is_refused_with_the_cause(car):
         match(Cloud(points), surface, method="magic")
     with pytest.raises(InputError, match="tolerance"):
         match(Cloud(points), surface, tolerance_mm=0.0)
+    with pytest.raises(InputError, match="viewpoint must be three finite"):
+        match(Cloud(points), surface, viewpoint=(0.0, float("nan"), 1.0))
 
 
 def test_nan_and_duplicate_points_are_dropped_with_a_warning(car):

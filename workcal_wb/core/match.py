@@ -72,9 +72,9 @@ MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 CANDIDATE_FLOOR = 0.7
 # Steps of the final robust pass on all the fine points, from a pose already within their noise.
 POLISH_ITERATIONS = 2
-# The verdict refines the best pose again from this many times its final gate, on this many points
-# (see Judge.rank).
-WIDER_GATE, WIDER_POINTS = 8.0, 500
+# The verdict refines the best pose again from this many times its final gate, on this many points,
+# when at least MISFIT_SHARE of its view cells show it a little off (see Judge.rank).
+WIDER_GATE, WIDER_POINTS, MISFIT_SHARE = 8.0, 500, 0.01
 # Patches the scan's noise is measured on, points the statistics of the verdict are taken over (a
 # random subset: percentages to about half a percent), and points poses are weighed on (a few per
 # view cell) unless the call is close (see Judge._level).
@@ -85,8 +85,9 @@ VIEW_SAMPLES, VIEW_SAMPLES_FINE, CLOSE_CALL = 6000, 24000, 2.0
 # Points of the middle refinement stage, where the gate shrinks: enough to average the noise.
 MEDIUM_POINTS = 3000
 # Global candidates and near-symmetric turns scoring below this fraction of the best are not
-# refined further: after the coarse stage they cannot come close to it.
-RIVAL_FLOOR = 0.6
+# refined further: after the coarse stage they cannot come close to it.  Turns are scored on this
+# many points.
+RIVAL_FLOOR, TURN_POINTS = 0.6, 1000
 # A placed model must explain the scan to within its own noise: the robust residual scale may be
 # at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
 # matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
@@ -108,11 +109,14 @@ CELL_VARIANCE_FLOOR = 0.01
 # normal; when more than MAX_FACING_AWAY of them face away from it, the scan was not taken from one
 # viewpoint (merged views) and the verdict falls back to scan points without visibility.
 VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
+# Before a pose is failed for contradicting the view, the view is tried again from an estimated
+# viewpoint turned by this angle and twice it (see Judge.least_contradicted).
+SETTLE_STEP_DEG = 15.0
 # A pose contradicting more than this share of its view (scan points it would hide, surface it
 # should show missing) leaves a large part of the scan unexplained: the match fails.  When the
 # scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
 # misplaced (or another object lies flush with the part): the match is ambiguous.
-MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.05
+MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
 THIN_WALL_NOISES = 5.0
@@ -208,6 +212,11 @@ def _checked_options(options: MatchOptions) -> MatchOptions:
         raise InputError(f"match seed must be a whole number from 0 to 2**63 - 1, got {options.seed}")
     if options.coarse_voxel_mm is not None and not options.coarse_voxel_mm > 0:
         raise InputError(f"coarse voxel must be > 0 mm, got {options.coarse_voxel_mm}")
+    if options.viewpoint is not None and not (np.shape(options.viewpoint) == (3,)
+                                              and np.isfinite(np.asarray(options.viewpoint, float)).all()):
+        raise InputError(f"viewpoint must be three finite coordinates in mm, got {options.viewpoint!r}")
+    if not options.rival_significance > 0:
+        raise InputError(f"rival significance must be > 0 standard errors, got {options.rival_significance}")
     return options
 
 
@@ -322,7 +331,7 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
     patch's own half turns catch a scan laid inside out on a face (a flat face fits both ways; its
     edges and the sides beyond tell which).
     """
-    moved = frames.apply(best.T, medium)
+    moved = frames.apply(best.T, medium[:TURN_POINTS])
     on_model = surface.nearest_cell(moved, best.gate)[2]
     patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
     from .symmetry import principal_axes, turn
@@ -330,7 +339,7 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
     centre, axes, _ = principal_axes(patch, np.ones(len(patch)))
     turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
     turned = turns @ best.T
-    scores = inlier_scores(medium, surface, np.concatenate([best.T[None], turned]), best.gate)
+    scores = inlier_scores(medium[:TURN_POINTS], surface, np.concatenate([best.T[None], turned]), best.gate)
     return [coarse_to_fine([medium], surface, T, gate, surface.spacing)
             for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
 
@@ -388,9 +397,15 @@ class Judge:
         model's symmetries, weighed by view evidence.  Every pose is refined again from a wider gate
         first (``widen``): a fit can stop an edge's width off, its edge points dropped as outliers,
         and from further out it slides home.  A pose whose evidence is significantly above the best's
-        becomes the best (``polish`` finishes it like the best, and it is widened again)."""
+        becomes the best (``polish`` finishes it like the best), and a best whose view shows a misfit
+        (scan points hidden or past its outline, surface missing) is widened again."""
         if self.options.method == "robust":  # each rival slides home too, or it is judged off its best
             rivals = [widen(r) for r in rivals]
+            # A rival that slid onto the best, or onto an earlier rival, is no rival.
+            poses = [best] + rivals
+            keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), self.all_points.mean(axis=0),
+                                          5.0, 0.05 * self.surface.diagonal)
+            rivals = [poses[i] for i in keep if i]
         rivals = self._distinct_under_symmetry(best, rivals)
         # The scan's noise where it lies on the model: clutter and stray points scatter differently.
         on_part = self.surface.nearest_cell(frames.apply(best.T, self.probes), best.gate)[2]
@@ -412,7 +427,7 @@ class Judge:
             if top and self._better(weighed[top], weighed[0]):
                 poses = [polish(poses[top])] + poses[:top] + poses[top + 1:]
                 weighed = [self.evidence(poses[0].T)] + weighed[:top] + weighed[top + 1:]
-            wide = widen(poses[0])
+            wide = widen(poses[0]) if _misfit(weighed[0]) else poses[0]  # a clean view needs no second look
             if _moved(wide.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                 evidence = self.evidence(wide.T)
                 if self._better(evidence, weighed[0]):
@@ -469,6 +484,23 @@ class Judge:
             self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
                                                            f"of its normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
 
+    def least_contradicted(self, T: np.ndarray) -> float:
+        """The smallest share of pose T's view contradicted, looking from the viewpoint and from
+        around it.  An estimated viewpoint is only good to some 30 degrees, and the real sensor saw
+        every scan point, so from where it was the right pose hides none: a pose is only found to
+        contradict the view when it does so from all around.  (The poses are still compared from
+        the one viewpoint: turning it for one pose would favour that pose.)"""
+        share = _contradicted(self.evidence(T))
+        if self.view is None or not self.source.startswith("estimated"):
+            return share
+        viewpoint, centre = self.viewpoint, self.target
+        distance = np.linalg.norm(viewpoint - centre)
+        for direction in visibility.cone((viewpoint - centre) / distance, SETTLE_STEP_DEG, rings=2)[1:]:
+            self._set_view(centre + distance * direction, centre, self.source)
+            share = min(share, _contradicted(self.evidence(T)))
+        self._set_view(viewpoint, centre, self.source)
+        return share
+
     def _set_view(self, viewpoint, target, source: str) -> None:
         self.viewpoint, self.target, self.source = viewpoint, target, source
         self.view = visibility.ScanView.of(self.sample, visibility.View(viewpoint, target, self.pixel))
@@ -515,6 +547,18 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
 
 
+def _contradicted(evidence: visibility.Evidence) -> float:
+    """Share of the cells the model covers that contradict it (hidden, missing, continued)."""
+    return float(np.count_nonzero(evidence.cells <= -0.5) / max(np.count_nonzero(evidence.cells), 1))
+
+
+def _misfit(evidence: visibility.Evidence) -> bool:
+    """Whether a pose's view shows signs of sitting a little off: MISFIT_SHARE of its cells
+    contradicted (hidden, missing, continued past its outline) or behind its surface."""
+    cells = max(int(np.count_nonzero(evidence.cells)), 1)
+    return (np.count_nonzero(evidence.cells <= -0.5) + evidence.off) >= MISFIT_SHARE * cells
+
+
 def _moved(T: np.ndarray, reference: np.ndarray, centre: np.ndarray, gate: float) -> bool:
     """Whether two poses differ by more than a quarter of the gate at ``centre`` or 0.1 degrees."""
     shift = np.linalg.norm(frames.apply(T, centre[None]) - frames.apply(reference, centre[None]))
@@ -555,10 +599,12 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
                        f"{options.tolerance_mm} mm tolerance): the scan may not contain this model")
     if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
-        reasons.append(f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view (at most "
-                       f"{100 * MAX_CONTRADICTED:.0f} %): it would hide {view['hidden_points']} scan points and "
-                       f"{view['missing_cells']} view cells of its surface facing the sensor show nothing; the pose "
-                       "leaves much of the scan unexplained")
+        view["contradicted_pct"] = 100 * judge.least_contradicted(T)
+    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+        reasons.append(f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view, from the viewpoint "
+                       f"and from up to {2 * SETTLE_STEP_DEG:g} degrees around it (at most {100 * MAX_CONTRADICTED:.0f} "
+                       f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
+                       "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
     status = FAILED if reasons else OK
     listed = _candidates(judged, surface, T)
     rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
@@ -578,7 +624,9 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
                        f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
                        "the scan unexplained")
-    thickness = judge.wall_thickness(T, judged[0]["evidence"]) if status == OK else float("inf")
+    # Walls under two sample spacings are not resolved by the sampled model: only look for thinner ones.
+    resolved = THIN_WALL_NOISES * judge.noise > 2 * surface.spacing
+    thickness = judge.wall_thickness(T, judged[0]["evidence"]) if status == OK and resolved else float("inf")
     if thickness < THIN_WALL_NOISES * judge.noise:
         reasons.append(f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
                        f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "

@@ -187,6 +187,9 @@ def find(points, normals, weights, tree, spacing: float, diagonal: float, tolera
     else:
         candidates = []
     _scan(candidates, centre, self_match, add, found)
+    if len(continuous) == 1:  # turning it over about any axis across: one such axis says it
+        across = [i for i, f in enumerate(found) if f[2] == 2 and abs(f[0] @ continuous[0][0]) < 0.1]
+        found = [f for i, f in enumerate(found) if i not in across[1:]]
     return {"axes": np.array([f[0] for f in found]).reshape(-1, 3),
             "points": np.array([f[1] for f in found]).reshape(-1, 3),
             "orders": np.array([f[2] for f in found], dtype=np.int64),
@@ -260,7 +263,7 @@ def describe(axes, points, orders) -> list[str]:
     part 90 degrees about its axis (0.00, 0.00, 1.00) through (...) mm gives the same surface"."""
     axes, points, orders = np.asarray(axes).reshape(-1, 3), np.asarray(points).reshape(-1, 3), np.asarray(orders)
     if (orders == 0).sum() >= 2:
-        c = points[orders == 0][0]
+        c = np.round(points[orders == 0][0], 1) + 0.0  # no "-0.0"
         return [f"turning the part by any angle about any axis through its centre ({c[0]:.1f}, {c[1]:.1f}, "
                 f"{c[2]:.1f}) mm gives the same surface"]
     main = [i for i in range(len(orders)) if orders[i] != 2]
@@ -285,5 +288,6 @@ def describe(axes, points, orders) -> list[str]:
 
 
 def _where(axis, point) -> str:
+    axis, point = np.round(axis, 2) + 0.0, np.round(point, 1) + 0.0  # no "-0.00"
     return (f"({axis[0]:.2f}, {axis[1]:.2f}, {axis[2]:.2f}) through ({point[0]:.1f}, {point[1]:.1f}, "
             f"{point[2]:.1f}) mm")

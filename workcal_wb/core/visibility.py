@@ -190,7 +190,6 @@ class Evidence:
     outline: int = 0  # pixels on the model's outline in the view
     inside: int = 0  # scan pixels inside the model's outline
     off: int = 0  # of those, pixels whose scan points lie behind the model's surface (inside the part)
-    viewpoint: np.ndarray | None = None  # where the pose was judged from
 
     @property
     def score(self) -> float:
@@ -322,12 +321,12 @@ def viewing_direction(normals: np.ndarray, rng: np.random.Generator | None = Non
     best = sample.sum(axis=0)
     best /= max(np.linalg.norm(best), 1e-12)
     for step in (12.0, 3.0):
-        cone = _cone(best, step, rings=4)
-        best = cone[np.argmax(np.partition(sample @ cone.T, low, axis=0)[low])]
+        directions = cone(best, step, rings=4)
+        best = directions[np.argmax(np.partition(sample @ directions.T, low, axis=0)[low])]
     return best
 
 
-def _cone(axis: np.ndarray, step_deg: float, rings: int) -> np.ndarray:
+def cone(axis: np.ndarray, step_deg: float, rings: int) -> np.ndarray:
     """``axis`` and directions on ``rings`` cones around it, ``step_deg`` apart, 12 per cone."""
     u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
     u /= np.linalg.norm(u)
