@@ -41,7 +41,7 @@ MAX_REFINED = 12
 NEIGHBOURS = 4
 # Self-registration steps of a candidate, and the share of the check points that must land on the
 # surface within the tolerance (with matching normals) for a symmetry: a feature covering more than
-# the rest of the surface (0.3 %, an 8 x 8 mm mark on a 100 x 100 x 10 mm plate) breaks it.
+# 0.3 % of the surface (an 8 x 8 mm mark on a 100 x 100 x 10 mm plate) breaks it.
 REFINE_STEPS, MIN_LANDED = 8, 0.997
 # Moments within this ratio make a quarter turn about the third axis worth trying in every match
 # (a near-square plate); the half turns about the principal axes are always tried.
@@ -142,9 +142,7 @@ def find(points, normals, weights, tree, spacing: float, diagonal: float, tolera
 
     Returns plain arrays: ``axes`` (k, 3), ``points`` (k, 3) one point on each axis, ``orders`` (k,)
     with n for an n-fold axis (2: a half turn) and 0 for any angle, ``deviations_mm`` (k,), and
-    ``flips`` (m, 4, 4): the half turns about the principal axes (and quarter turns about an axis
-    whose two other moments nearly agree) that are not symmetries: the near-symmetric turns a match
-    tries.
+    ``flips`` (m, 4, 4): the near-symmetric turns a match tries (see ``_flips``).
     """
     self_match = SelfMatch(points, normals, tree, spacing, diagonal, tolerance, seed)
     centre, axes, moments = principal_axes(points, weights)
