@@ -117,6 +117,9 @@ SETTLE_STEP_DEG = 15.0
 # scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
 # misplaced (or another object lies flush with the part): the match is ambiguous.
 MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
+# A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
+# spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
+THIN_PART = 0.05
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
 THIN_WALL_NOISES = 5.0
@@ -184,7 +187,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
         judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
                       options, result["warnings"])
         best, judged = judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
-                                  lambda state: _widened(state, medium, surface))
+                                  lambda state: _widened(state, medium, surface),
+                                  lambda state: _through_the_wall(state, medium, surface, gate))
         return _verdict(scan, sample, surface, best, judged, judge, options, voxel, result, timer)
 
 
@@ -344,6 +348,36 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
             for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
 
 
+def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
+    """The pose shifted through the wall its scan lies on, onto the wall's other face, refined (a
+    scan of one face of a thin plate or shell fits its back face nearly as well); [] without a wall."""
+    samples = surface.points[surface.view_order[:VIEW_SAMPLES]]
+    if np.sqrt(max(np.linalg.eigvalsh(np.cov(samples.T))[0], 0.0)) > THIN_PART * surface.diagonal:
+        return []  # no thin plate or shell: every wall is a body's
+    patch = frames.apply(state.T, medium[:TURN_POINTS])
+    _, idx, found = surface.nearest_cell(patch, state.gate)
+    patch, idx = patch[found], idx[found]
+    if len(patch) < MIN_SCAN_POINTS:
+        return []
+    normal = surface.normals[idx].sum(axis=0)
+    normal /= max(np.linalg.norm(normal), 1e-12)
+    samples = surface.view_order[:VIEW_SAMPLES]
+    pixel = PIXEL_MODEL_SPACINGS * surface.spacing * np.sqrt(len(surface.points) / len(samples))
+    centre = patch.mean(axis=0)
+    view = visibility.View(centre + surface.diagonal * normal, centre, pixel).framed(patch, margin=0)
+    thickness = visibility.wall_thickness(view, surface.points[samples], surface.normals[samples])
+    pixels, _ = view.pixels(patch)
+    seen = thickness[pixels[pixels >= 0]]
+    seen = seen[np.isfinite(seen)]
+    if len(seen) < MIN_SCAN_POINTS or not np.median(seen) < 0.25 * surface.diagonal:
+        return []
+    shifted = frames.rigid(translation=-float(np.median(seen)) * normal) @ state.T
+    scores = inlier_scores(medium[:TURN_POINTS], surface, [state.T, shifted], state.gate)
+    if scores[1] < RIVAL_FLOOR * scores[0]:  # a solid body, not a thin wall
+        return []
+    return [coarse_to_fine([medium], surface, shifted, gate, surface.spacing)]
+
+
 def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: float) -> np.ndarray:
     """For each transform, how many points it puts on the model, each weighted by how close it is
     (1 on the surface, 0 at the gate): a count, so clutter cannot dilute it; one grid lookup."""
@@ -392,19 +426,23 @@ class Judge:
         if self.viewpoint is not None:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
-    def rank(self, best, rivals, polish, widen):
+    def rank(self, best, rivals, polish, widen, through):
         """(best state, [{"T", "evidence", "z"}, best first]): the poses not equivalent under the
         model's symmetries, weighed by view evidence.  Every pose is refined again from a wider gate
         first (``widen``): a fit can stop an edge's width off, its edge points dropped as outliers,
         and from further out it slides home.  A pose whose evidence is significantly above the best's
         becomes the best (``polish`` finishes it like the best), and a best whose view shows a misfit
         (scan points hidden or past its outline, surface missing) is widened again."""
-        if self.options.method == "robust":  # each rival slides home too, or it is judged off its best
+        if self.options.method == "robust" and rivals:  # each pose slides home, or it is judged off its best
             rivals = [widen(r) for r in rivals]
-            # A rival that slid onto the best, or onto an earlier rival, is no rival.
+            wide = widen(best)
+            if _moved(wide.T, best.T, self.all_points.mean(axis=0), best.gate):
+                best = polish(wide)
+            # A rival that slid onto the best, or onto an earlier rival, is no rival; one a wall's
+            # thickness away (on the other face) still is, so "the same" is within a few gates here.
             poses = [best] + rivals
             keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), self.all_points.mean(axis=0),
-                                          5.0, 0.05 * self.surface.diagonal)
+                                          2.0, 2 * best.gate)
             rivals = [poses[i] for i in keep if i]
         rivals = self._distinct_under_symmetry(best, rivals)
         # The scan's noise where it lies on the model: clutter and stray points scatter differently.
@@ -433,10 +471,36 @@ class Judge:
                 if self._better(evidence, weighed[0]):
                     poses[0] = polish(wide)
                     weighed[0] = self.evidence(poses[0].T)
+            # The best laid on the other face of the wall it sees, judged like every rival.
+            for other in through(poses[0]):
+                if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
+                    poses.append(other)
+                    weighed.append(self.evidence(other.T))
         judged = [{"T": p.T, "evidence": e,
-                   "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if i else 0.0}
+                   "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if i else 0.0,
+                   "other_side": bool(i) and self._from_the_other_side(poses[0].T, p.T)}
                   for i, (p, e) in enumerate(zip(poses, weighed))]
         return poses[0], judged
+
+    def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
+        """Whether the rival, seen from the side of the part its own matched surface faces, would
+        explain the scan about as well as the best: it implies a viewpoint on the other side (a
+        thin wall, or a face laid inside out) and is not significantly worse by the scan points it
+        puts on the model.  The view evidence, judged from one side, cannot rule such a rival out
+        when the viewpoint is only estimated."""
+        if self.view is None or not self.source.startswith("estimated"):
+            return False
+        looks = []
+        weights = []
+        for T in (best, rival):
+            idx, found, r = self._lookup(T)
+            matched = found & (r < self.gate)
+            if matched.sum() < MIN_SCAN_POINTS:
+                return False
+            looks.append(visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3]))
+            weights.append(np.clip(1 - (r / self.gate) ** 2, 0, 1))
+        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
+                    < self.options.rival_significance)
 
     def _better(self, evidence: visibility.Evidence, than: visibility.Evidence) -> bool:
         return visibility.compare(evidence.cells, than.cells, CELL_VARIANCE_FLOOR) > self.options.rival_significance
@@ -608,11 +672,18 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     status = FAILED if reasons else OK
     listed = _candidates(judged, surface, T)
     rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
+              or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     symmetries = surface.symmetries()
     if status == OK and symmetries:
         reasons.append("the model is symmetric: " + "; ".join(symmetries) + " (in the model's frame): no scan can tell "
                        "these poses apart, U is one of them")
+    other_side = [c for c in rivals if c["from_the_other_side"]]
+    if status == OK and other_side:
+        reasons.append(f"{len(other_side)} pose(s) put about as many scan points on the model seen from the other side "
+                       f"of it (the closest {other_side[0]['rotation_from_best_deg']:.1f} deg away): which side of the "
+                       "part the scan shows cannot be told without the scanner's position (give it as viewpoint)")
+    rivals = [c for c in rivals if not c["from_the_other_side"]]
     if status == OK and rivals:
         r = min(rivals, key=lambda c: c["standard_errors_below_best"])
         reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
@@ -663,6 +734,7 @@ def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
         listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
                        "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
                        "standard_errors_below_best": float(entry["z"]),
+                       "from_the_other_side": entry["other_side"],
                        "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
                        "shift_from_best_mm": float(np.linalg.norm(

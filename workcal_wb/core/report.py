@@ -280,7 +280,7 @@ def _matches_html(calibration: CalibrationResult) -> str:
     return _table(rows, ["", *(name for name, _ in matches)])
 
 
-def symmetry_sentences(calibration: CalibrationResult) -> list[str]:
+def _symmetry_sentences(calibration: CalibrationResult) -> list[str]:
     """One sentence per model symmetry of either match: "The workpiece model is symmetric: turning the
     part 90 degrees about its axis ... gives the same surface." """
     out = []
@@ -292,7 +292,7 @@ def symmetry_sentences(calibration: CalibrationResult) -> list[str]:
 
 
 def _symmetry_html(calibration: CalibrationResult) -> str:
-    sentences = symmetry_sentences(calibration)
+    sentences = _symmetry_sentences(calibration)
     if not sentences:
         return ""
     return "<h2>Symmetry</h2><ul>" + "".join(f"<li>{_e(s)}</li>" for s in sentences) + "</ul>"
