@@ -12,7 +12,7 @@ XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup demo test test-headless test-gui test-other-freecad fuzz bench clean
+.PHONY: setup demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -43,6 +43,10 @@ fuzz: setup
 
 bench: setup
 	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
+
+# Only the verdicts table (a few minutes), replacing its section of docs/benchmarks.md.
+bench-verdicts: setup
+	$(PYTHON) -m workcal_wb bench --only verdicts --out $(CURDIR)/docs/benchmarks.md
 
 # Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:

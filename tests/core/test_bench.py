@@ -61,3 +61,35 @@ def test_table_reports_met_and_missed_targets():
                              STOCK: (_rows(STOCK, time_s=0.3), 400.0)}, [], seed=0, quick=True, rounds=1, note=None)
     assert any("success 75%" in m for m in slow_and_wrong.missed)
     assert any("0.67 x stock" in m for m in slow_and_wrong.missed)
+
+
+def test_dragon_scans_lie_on_the_other_scans_at_their_truth():
+    """The real-data set in the repository: each decimated dragon scan, moved by its .conf truth,
+    lies on the other 14 scans aligned the same way (the model it is matched against)."""
+    from workcal_wb.core.benchmark.verdicts import dragon_cases
+
+    cases = dragon_cases(seed=1)
+    assert len(cases) == 15
+    for case in cases[::7]:
+        surface = SurfaceModel(case.model)
+        assert 0.85 < _on_model(case, surface, gate=1.0) <= 1.0, case.name
+        wrong = frames.apply(frames.invert(case.truth), case.scan) @ frames.rot_z(90.0).T
+        assert surface.nearest(wrong, 1.0)[2].mean() < 0.3
+
+
+def test_verdict_table_counts_statuses_and_wrong_oks():
+    from workcal_wb.core.benchmark.verdicts import VerdictRow, goals, table
+
+    rows = [VerdictRow("a", "g", 100, 0.3, 0.1, False, "ok", True, ""),
+            VerdictRow("b", "g", 100, 0.3, 0.1, False, "ok", False, ""),
+            VerdictRow("c", "g", 100, 0.3, 0.1, False, "ambiguous", True, "the part may be nearly symmetric"),
+            VerdictRow("d", "h", 100, 0.3, 0.5, False, "failed", True, "the scan's own noise is 0.50 mm"),
+            VerdictRow("e", "h", 100, 0.3, 0.1, True, "ambiguous", True, "the model is symmetric")]
+    wrong_ok, missed = goals(rows)
+    assert [r.case for r in wrong_ok] == ["b"]
+    assert [r.case for r in missed] == ["c"]  # d's noise is above its tolerance, e is symmetric
+    text, wrong = table(rows, seed=0)
+    assert wrong == ["b"]
+    assert "| g | 3 | 1 / 1 | 1 / 0 | 0 / 0 |" in text and "| h | 2 | 0 / 0 | 1 / 0 | 1 / 0 |" in text
+    assert "wrong poses reported \"ok\": **1** (goal 0): b" in text
+    assert "not reported \"ok\": **1 of 2** (goal 0)" in text

@@ -96,3 +96,25 @@ def test_planar_model_exits_2(files, tmp_path, capsys):
 def test_bench_is_a_subcommand():
     args = build_parser().parse_args(["bench", "--out", "table.md", "--quick"])
     assert args.command == "bench" and args.quick and str(args.out) == "table.md"
+
+
+def test_viewpoint_of_a_scan_in_the_scanner_frame(tmp_path, capsys):
+    """A scan left in the scanner's own frame: --viewpoint 0 0 0 (in the scan's units) is used as
+    given; a viewpoint behind the part is refused with a warning and the viewpoint estimated."""
+    scene = build_scene("car", seed=5)
+    scan = zoomed_on_workpiece(scene, 30.0, 5, pixel_pitch_mm=0.6).scan(scene)
+    write_ply(tmp_path / "scan.ply", Cloud(scan.points[scan.mask("workpiece")]), units="m")  # written in metres
+    write_ply(tmp_path / "car.ply", scene.workpiece_model())
+    out = tmp_path / "m.json"
+    args = ["match", str(tmp_path / "scan.ply"), str(tmp_path / "car.ply"), "--units", "m", "--model-units", "mm",
+            "--json", str(out)]
+    assert main(args + ["--viewpoint", "0", "0", "0"]) == 0
+    data = json.loads(out.read_text())
+    assert data["status"] == "ok" and data["viewpoint"]["source"] == "given"
+    assert np.allclose(data["viewpoint"]["position_mm"], 0.0)
+    assert frames.rotation_between_deg(np.array(data["matrix"]), scan.U) < 0.02
+    behind = 2.5 * np.asarray(scan.points[scan.mask("workpiece")].mean(axis=0)) / 1000.0  # past the part, in m
+    assert main(args + ["--viewpoint", *map(str, behind)]) == 0
+    data = json.loads(out.read_text())
+    assert data["viewpoint"]["source"].startswith("estimated")
+    assert any("given viewpoint" in w and "from behind" in w for w in data["warnings"])

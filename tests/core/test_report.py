@@ -183,3 +183,21 @@ def test_studies_are_embedded_in_the_report(lumpy, tmp_path):
     assert 'class="banner' not in alone  # no calibration in a studies page
     data = json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))
     assert data["studies"][0]["name"] == "made-up" and data["studies"][0]["passed"] is False
+
+
+def test_report_names_the_symmetry_of_a_symmetric_workpiece(tmp_path):
+    """A workpiece with a four-fold symmetry (a square plate with a square boss): the calibration is
+    ambiguous and the report says which turn gives the same surface, in words."""
+    from workcal_wb.core.simulate import shapes
+
+    scene = build_scene(shapes.boss_plate(), seed=4)
+    scan = Scanner.aimed_at(scene, seed=4, image_size=(368, 276)).scan(scene)
+    regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions,
+                       options=CalibrationOptions(resamples=2))
+    assert result.status == "ambiguous"
+    page = write_report(result, tmp_path)["html"].read_text(encoding="utf-8")
+    assert "<h2>Symmetry</h2>" in page
+    assert "The workpiece model is symmetric: turning the part 90 degrees about its axis" in page
+    assert "The reference model is symmetric" not in page  # the L-block has no symmetry
+    assert "workpiece model symmetry: turning the part 90 degrees" in result.summary()

@@ -5,11 +5,12 @@ import json
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import input_file, positive, seed
+from workcal_wb.cli.arguments import finite, input_file, positive, seed
 from workcal_wb.core.match import METHODS, match
 from workcal_wb.core.outputs import check_file
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.result import FAILED
+from workcal_wb.core.units import mm_per_unit
 
 UNITS = ("mm", "m", "in")
 
@@ -29,6 +30,9 @@ def add_parser(subparsers):
     p.add_argument("--json", metavar="FILE", help="also write the full result as JSON (matrix = U, row-major, mm)")
     p.add_argument("--tolerance", type=positive, default=0.3, metavar="MM",
                    help="deviation tolerance for the within-tolerance figure and the fit check (default 0.3 mm)")
+    p.add_argument("--viewpoint", type=finite, nargs=3, metavar=("X", "Y", "Z"),
+                   help="where the scanner was, in the scan's frame and units (e.g. 0 0 0 for a scan in the scanner's "
+                        "own coordinates); by default it is estimated from the matched surface")
     p.add_argument("--seed", type=seed, default=0, help="seed for the random parts (repeatable runs)")
     return p
 
@@ -40,7 +44,8 @@ def run(args) -> int:
     model = read_cloud(args.model, units=args.model_units or args.units, unit_option="--model-units")
     for warning in scan.warnings + model.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    result = match(scan, model, method=args.method, tolerance_mm=args.tolerance, seed=args.seed)
+    viewpoint = None if args.viewpoint is None else tuple(v * mm_per_unit(args.units) for v in args.viewpoint)
+    result = match(scan, model, method=args.method, tolerance_mm=args.tolerance, seed=args.seed, viewpoint=viewpoint)
     print(result.summary())
     if args.json:
         from workcal_wb.core.atomic import atomic_write_text

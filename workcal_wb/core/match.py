@@ -4,12 +4,17 @@ The work happens with scan points moved onto the model (scan -> model), because 
 complete surface: every scan point of the part has a true mate on it and clutter has none.  The
 result reports U = (scan -> model)^-1.
 
-Poses are compared by how many scan points they put on the model (weighted by closeness), never by
-the fraction of the scan: clutter around the part dilutes every pose alike.  A pose is trusted only
-when it explains the scan to within the scan's own noise (plus the tolerance), covers a real part
-of the model and pins every motion; a clearly different pose that fits almost as well (found by
-the search, or a half turn of a symmetric model) makes it ambiguous.  Otherwise the match fails
-and says why.
+The search compares poses by how many scan points they put on the model (weighted by closeness),
+never by the fraction of the scan: clutter around the part dilutes every pose alike.  The verdict
+then judges the best pose and its rivals (other poses of the search, and the model's near-symmetric
+turns, always tried) by what the sensor should have seen from each (visibility.py): scan points on
+the model's visible surface count for a pose, scan points it would hide and model surface missing
+from the scan count against it.  A pose is "ok" only when it explains the scan to within the scan's
+own noise, which must not exceed the tolerance, covers a real part of the model, leaves no large
+share of the view contradicted, pins every motion, and no rival is within the statistical noise of
+its evidence (given the number of view cells and the measured noise); a model that is symmetric
+(symmetry.py) makes every match ambiguous and the result names the symmetry.  Otherwise the match
+fails or is ambiguous and says why.
 """
 from __future__ import annotations
 
@@ -19,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import frames, global_search, pointops
+from . import frames, global_search, pointops, visibility
 from .edges import centre_on_edges, has_weak_motion
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
@@ -43,7 +48,12 @@ class MatchOptions:
     coarse_voxel_mm: float | None = None  # default: model diagonal / COARSE_VOXELS_PER_DIAGONAL
     ransac_samples: int = 40000
     candidates: int = 4  # distinct poses refined after the global search
-    ambiguity_ratio: float = 0.9  # a distinct pose scoring this fraction of the best -> ambiguous
+    # A distinct pose is a rival (-> ambiguous) unless its view evidence is this many standard errors
+    # below the best's; ``ambiguity_ratio``, if set, also makes any pose scoring at least that
+    # fraction of the best a rival (a fixed margin on top of the test).
+    rival_significance: float = 3.0
+    ambiguity_ratio: float | None = None
+    viewpoint: tuple | None = None  # the sensor's position in the scan's frame (mm); None: estimated
     min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
     max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
@@ -62,14 +72,22 @@ MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 CANDIDATE_FLOOR = 0.7
 # Steps of the final robust pass on all the fine points, from a pose already within their noise.
 POLISH_ITERATIONS = 2
-# Patches the scan's noise is measured on, and points the statistics of the verdict are taken
-# over (a random subset: percentages to about half a percent).
-NOISE_PROBES, VERDICT_POINTS = 300, 10000
+# The verdict refines the best pose again from this many times its final gate, on this many points,
+# when at least MISFIT_SHARE of its view cells show it a little off (see Judge.rank).
+WIDER_GATE, WIDER_POINTS, MISFIT_SHARE = 8.0, 500, 0.01
+# Patches the scan's noise is measured on, points the statistics of the verdict are taken over (a
+# random subset: percentages to about half a percent), and points poses are weighed on (a few per
+# view cell) unless the call is close (see Judge._level).
+NOISE_PROBES, VERDICT_POINTS, EVIDENCE_POINTS = 300, 10000, 5000
+# Model samples a view is rendered from: quickly, and for a close call (within CLOSE_CALL times the
+# rival significance).
+VIEW_SAMPLES, VIEW_SAMPLES_FINE, CLOSE_CALL = 6000, 24000, 2.0
 # Points of the middle refinement stage, where the gate shrinks: enough to average the noise.
 MEDIUM_POINTS = 3000
-# Global candidates scoring below this fraction of the best are not refined further: after the
-# coarse stage they cannot come within ``ambiguity_ratio`` of it.
-RIVAL_FLOOR = 0.6
+# Global candidates and near-symmetric turns scoring below this fraction of the best are not
+# refined further: after the coarse stage they cannot come close to it.  Turns are scored on this
+# many points.
+RIVAL_FLOOR, TURN_POINTS = 0.6, 1000
 # A placed model must explain the scan to within its own noise: the robust residual scale may be
 # at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
 # matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
@@ -78,6 +96,37 @@ MAX_NOISE_RATIO = 3.0
 # are a volume, not a surface (surface scans measured below 0.1, noisy sparse ones included;
 # a random blob 0.34).
 MAX_SCATTER = 0.3
+# The view evidence: a scan point counts fully on the model surface and nothing at EVIDENCE_SIGMAS
+# times the residual scale (the larger of the best pose's and the scan's and model's own noise).
+EVIDENCE_SIGMAS = 3.0
+# View pixels: at least this many spacings of the verdict's scan points, and of the model's view
+# samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
+PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
+# Least variance of one view cell's evidence difference between two poses (model and scan sampling):
+# a difference of under about 3 % of the cells is never significant.
+CELL_VARIANCE_FLOOR = 0.01
+# An estimated viewpoint sits this many scan extents from the matched points, along their mean
+# normal; when more than MAX_FACING_AWAY of them face away from it, the scan was not taken from one
+# viewpoint (merged views) and the verdict falls back to scan points without visibility.
+VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
+# Before a pose is failed for contradicting the view, the view is tried again from an estimated
+# viewpoint turned by this angle and twice it (see Judge.least_contradicted).
+SETTLE_STEP_DEG = 15.0
+# A pose contradicting more than this share of its view (scan points it would hide, surface it
+# should show missing) leaves a large part of the scan unexplained: the match fails.  When the
+# scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
+# misplaced (or another object lies flush with the part): the match is ambiguous.
+MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
+# A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
+# spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
+THIN_PART = 0.05
+# Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
+# shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
+THIN_WALL_NOISES = 5.0
+# A pose whose outline, seen from the sensor, holds more than this share of scan pixels whose points
+# lie behind its surface, inside the part (within OFF_BAND_GATES evidence gates: further behind they
+# are hidden, a contradiction), leaves a large share of the scan unexplained: ambiguous.
+MAX_OFF, OFF_BAND_GATES = 0.1, 10.0
 
 
 def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOptions = MatchOptions(),
@@ -108,7 +157,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
                            reasons=[f"{scan.name}: the scan points are {kind}; they cannot fix a pose"])
     fine = _subset(scan.points, options.max_fine_points, rng)
     medium = _subset(fine, MEDIUM_POINTS, rng)
-    noise, patch = pointops.surface_noise(medium, rng, probes=NOISE_PROBES)
+    probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
+    noise, patch = (float(np.median(probe_noise)), float(np.median(probe_radius))) if len(probes) else (np.inf, 0.0)
     if not noise <= MAX_SCATTER * patch:
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                            reasons=[f"{scan.name}: the points do not lie on a surface (they scatter {noise:.2f} mm "
@@ -132,16 +182,21 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
 
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
-        scores = inlier_scores(medium, surface, [best.T] + rivals, best.gate)
     with timer("verdict"):
-        return _verdict(scan, fine[:VERDICT_POINTS], noise, surface, best, list(zip([best.T] + rivals, scores)),
-                        options, voxel, result, timer)
+        sample = fine[:VERDICT_POINTS]
+        judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
+                      options, result["warnings"])
+        best, judged = judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
+                                  lambda state: _widened(state, medium, surface),
+                                  lambda state: _through_the_wall(state, medium, surface, gate))
+        return _verdict(scan, sample, surface, best, judged, judge, options, voxel, result, timer)
 
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
     """Compute ahead of time everything model-side a match may use: the coarse features at the
     default voxel and the finer ones a partial scan may ask for, and the whole nearest-sample
-    grid the refinement looks up.  A batch of matches against one model then pays for it once;
+    grid the refinement looks up (the symmetries and view samples are found when the SurfaceModel
+    is made).  A batch of matches against one model then pays for it once;
     without it the same work is done lazily, a little in each match (seconds for ~100k samples)."""
     voxel = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
     while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / MAX_VOXEL_REFINEMENT:
@@ -161,6 +216,11 @@ def _checked_options(options: MatchOptions) -> MatchOptions:
         raise InputError(f"match seed must be a whole number from 0 to 2**63 - 1, got {options.seed}")
     if options.coarse_voxel_mm is not None and not options.coarse_voxel_mm > 0:
         raise InputError(f"coarse voxel must be > 0 mm, got {options.coarse_voxel_mm}")
+    if options.viewpoint is not None and not (np.shape(options.viewpoint) == (3,)
+                                              and np.isfinite(np.asarray(options.viewpoint, float)).all()):
+        raise InputError(f"viewpoint must be three finite coordinates in mm, got {options.viewpoint!r}")
+    if not options.rival_significance > 0:
+        raise InputError(f"rival significance must be > 0 standard errors, got {options.rival_significance}")
     return options
 
 
@@ -224,13 +284,13 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
 
 def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
             tolerance: float):
-    """The best pose refined on all the fine points, and the distinct rivals refined on the medium ones.
+    """The best pose refined on all the fine points, and the distinct rivals refined on the medium
+    ones (RefineStates, scan -> model).
 
     Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
     and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
     can tie with the right one, but only the right one brings the residuals down to the noise.
-    When the robust fit leaves a motion nearly free against a mesh, it goes on against the exact
-    surface and centres the pose between the edges that pin the motion (see edges).
+    The model's near-symmetric turns of the winner are tried as rivals too.
     """
     contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
     if len(contenders) == 1 and method != "robust":
@@ -241,32 +301,81 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
         order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
         contenders, states = [contenders[i] for i in order], [states[i] for i in order]
     if method == "robust":
-        chosen = states[0]
-        best = refine(fine, surface, chosen.T, chosen.gate, chosen.scale, POLISH_ITERATIONS)
-        best.iterations += chosen.iterations
-        if surface.is_mesh and has_weak_motion(fine, surface, best.T, best.gate, best.scale):
-            best = refine_exact(fine, surface, best)
-            best.T, best.stability = centre_on_edges(fine, surface, best.T, best.gate, best.sigma, tolerance)
+        best = _polish(states[0], fine, surface, tolerance)
     else:
         from .paper_methods import refine_paper
 
         best = refine_paper(method, fine, surface, contenders[0], gate)
-    poses = [best.T] + [s.T for s in states[1:]] + _symmetric_twins(best, medium, surface, gate)
+    poses = [best] + states[1:] + _near_symmetric_turns(best, medium, surface, gate)
     # In this order of preference, drop every pose that repeats an earlier one.
-    keep = global_search.distinct(poses, -np.arange(len(poses)), medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
+    keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), medium.mean(axis=0), 5.0,
+                                  0.05 * surface.diagonal)
     return best, [poses[i] for i in keep[1:]]
 
 
-def _symmetric_twins(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list[np.ndarray]:
-    """The best pose turned by the model's half-turn self-maps, refined where they fit at all.
+def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
+    """A pose refined on the medium points, finished on all the fine ones.  When the robust fit
+    leaves a motion nearly free against a mesh, it goes on against the exact surface and centres the
+    pose between the edges that pin the motion (see edges)."""
+    best = refine(fine, surface, state.T, state.gate, state.scale, POLISH_ITERATIONS)
+    best.iterations += state.iterations
+    if surface.is_mesh and has_weak_motion(fine, surface, best.T, best.gate, best.scale):
+        best = refine_exact(fine, surface, best)
+        best.T, best.stability = centre_on_edges(fine, surface, best.T, best.gate, best.sigma, tolerance)
+    return best
 
-    Feature search can miss the twin of a symmetric part (a box's faces all look alike), so the
-    flips a box, an ellipsoid or a cylinder maps onto itself are tried directly.
+
+def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
+    """The best pose turned by the model's near-symmetric turns (surface.flips: half turns about its
+    principal axes, quarter turns of a near-square, each refined into the model's best self-map) and
+    by half turns of the matched patch about its own principal axes, refined where they fit at all.
+
+    These are the poses a nearly symmetric part is mistaken for (turned over, end over end), and a
+    feature search can miss them when the part's faces look alike, so they are always tried.  The
+    patch's own half turns catch a scan laid inside out on a face (a flat face fits both ways; its
+    edges and the sides beyond tell which).
     """
-    twins = surface.symmetry_flips @ best.T
-    scores = inlier_scores(medium, surface, np.concatenate([best.T[None], twins]), best.gate)
-    return [coarse_to_fine([medium], surface, T, gate, surface.spacing).T
-            for T, score in zip(twins, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
+    moved = frames.apply(best.T, medium[:TURN_POINTS])
+    on_model = surface.nearest_cell(moved, best.gate)[2]
+    patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
+    from .symmetry import principal_axes, turn
+
+    centre, axes, _ = principal_axes(patch, np.ones(len(patch)))
+    turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
+    turned = turns @ best.T
+    scores = inlier_scores(medium[:TURN_POINTS], surface, np.concatenate([best.T[None], turned]), best.gate)
+    return [coarse_to_fine([medium], surface, T, gate, surface.spacing)
+            for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
+
+
+def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
+    """The pose shifted through the wall its scan lies on, onto the wall's other face, refined (a
+    scan of one face of a thin plate or shell fits its back face nearly as well); [] without a wall."""
+    samples = surface.points[surface.view_order[:VIEW_SAMPLES]]
+    if np.sqrt(max(np.linalg.eigvalsh(np.cov(samples.T))[0], 0.0)) > THIN_PART * surface.diagonal:
+        return []  # no thin plate or shell: every wall is a body's
+    patch = frames.apply(state.T, medium[:TURN_POINTS])
+    _, idx, found = surface.nearest_cell(patch, state.gate)
+    patch, idx = patch[found], idx[found]
+    if len(patch) < MIN_SCAN_POINTS:
+        return []
+    normal = surface.normals[idx].sum(axis=0)
+    normal /= max(np.linalg.norm(normal), 1e-12)
+    samples = surface.view_order[:VIEW_SAMPLES]
+    pixel = PIXEL_MODEL_SPACINGS * surface.spacing * np.sqrt(len(surface.points) / len(samples))
+    centre = patch.mean(axis=0)
+    view = visibility.View(centre + surface.diagonal * normal, centre, pixel).framed(patch, margin=0)
+    thickness = visibility.wall_thickness(view, surface.points[samples], surface.normals[samples])
+    pixels, _ = view.pixels(patch)
+    seen = thickness[pixels[pixels >= 0]]
+    seen = seen[np.isfinite(seen)]
+    if len(seen) < MIN_SCAN_POINTS or not np.median(seen) < 0.25 * surface.diagonal:
+        return []
+    shifted = frames.rigid(translation=-float(np.median(seen)) * normal) @ state.T
+    scores = inlier_scores(medium[:TURN_POINTS], surface, [state.T, shifted], state.gate)
+    if scores[1] < RIVAL_FLOOR * scores[0]:  # a solid body, not a thin wall
+        return []
+    return [coarse_to_fine([medium], surface, shifted, gate, surface.spacing)]
 
 
 def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: float) -> np.ndarray:
@@ -279,11 +388,252 @@ def inlier_scores(points: np.ndarray, surface: SurfaceModel, transforms, gate: f
     return np.clip(1 - (r / gate) ** 2, 0, 1).reshape(len(Ts), -1).sum(axis=1)
 
 
-def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceModel, best, candidates,
+class Judge:
+    """Weighs poses by their view evidence (visibility.evidence) on the verdict's scan points.
+
+    All poses are judged from one viewpoint in the scan's frame, so their evidence compares cell by
+    cell: the one given, or else the one implied by the pose that puts the most scan points on the
+    model: the surface it matches faces the sensor, so the sensor sits along the middle of the
+    matched model normals (visibility.viewing_direction).  (A pose that lays a scan inside out on a
+    flat face implies the opposite side; it explains fewer points than the right one, the scan's
+    edges and sides beyond the face, so it does not choose the viewpoint when the right pose is
+    there.)  A scan whose matched normals face every way (views merged into one cloud) has no
+    viewpoint: its poses are weighed by the scan points on the model.
+    """
+
+    def __init__(self, sample: np.ndarray, surface: SurfaceModel, probes, spacing: float,
+                 options: MatchOptions, warnings: list):
+        self.surface, self.options, self.warnings = surface, options, warnings
+        self.all_points, self.all_spacing = sample, spacing  # the fine level's points, and their spacing
+        self.probes, self.probe_noise = probes  # points the scan's noise was measured about, and the noise there
+        self.scan_noise = float(np.median(self.probe_noise))
+        self.noise = float("nan")  # what residuals scatter by: the noise of the scan (on the part) and the model
+        self.gate = float("nan")
+        self.viewpoint, self.source, self.view = None, "none", None
+        self._level(fine=False)
+
+    def _level(self, fine: bool) -> None:
+        """Weigh on a few scan points and a coarse view (quick), or on all the verdict's points and
+        a view with cells about a scan spacing wide (to tell near-symmetric poses apart)."""
+        count = len(self.all_points) if fine else min(len(self.all_points), EVIDENCE_POINTS)
+        self.sample = self.all_points[:count]
+        self.fine = fine
+        spacing = self.all_spacing * np.sqrt(len(self.all_points) / count)
+        self.view_samples = self.surface.view_order[:VIEW_SAMPLES_FINE if fine else VIEW_SAMPLES]
+        model_spacing = self.surface.spacing * np.sqrt(len(self.surface.points) / len(self.view_samples))
+        self.pixel = max(PIXEL_SCAN_SPACINGS * spacing, PIXEL_MODEL_SPACINGS * model_spacing,
+                         spacing * np.sqrt(count / MAX_VIEW_PIXELS))
+        if self.viewpoint is not None:
+            self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
+
+    def rank(self, best, rivals, polish, widen, through):
+        """(best state, [{"T", "evidence", "z"}, best first]): the poses not equivalent under the
+        model's symmetries, weighed by view evidence.  Every pose is refined again from a wider gate
+        first (``widen``): a fit can stop an edge's width off, its edge points dropped as outliers,
+        and from further out it slides home.  A pose whose evidence is significantly above the best's
+        becomes the best (``polish`` finishes it like the best), and a best whose view shows a misfit
+        (scan points hidden or past its outline, surface missing) is widened again."""
+        if self.options.method == "robust" and rivals:  # each pose slides home, or it is judged off its best
+            rivals = [widen(r) for r in rivals]
+            wide = widen(best)
+            if _moved(wide.T, best.T, self.all_points.mean(axis=0), best.gate):
+                best = polish(wide)
+            # A rival that slid onto the best, or onto an earlier rival, is no rival; one a wall's
+            # thickness away (on the other face) still is, so "the same" is within a few gates here.
+            poses = [best] + rivals
+            keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), self.all_points.mean(axis=0),
+                                          2.0, 2 * best.gate)
+            rivals = [poses[i] for i in keep if i]
+        rivals = self._distinct_under_symmetry(best, rivals)
+        # The scan's noise where it lies on the model: clutter and stray points scatter differently.
+        on_part = self.surface.nearest_cell(frames.apply(best.T, self.probes), best.gate)[2]
+        if on_part.sum() >= MIN_SCAN_POINTS:
+            self.scan_noise = float(np.median(self.probe_noise[on_part]))
+        self.noise = float(np.hypot(self.scan_noise, self.surface.noise_mm))
+        sigma = best.sigma if np.isfinite(best.sigma) else self.noise
+        self.gate = EVIDENCE_SIGMAS * max(sigma, self.noise, 1e-6)
+        poses = [best] + rivals
+        lookups = [self._lookup(p.T) for p in poses]
+        self._choose_view(poses, lookups)
+        weighed = [self.evidence(p.T, lookup) for p, lookup in zip(poses, lookups)]
+        if any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
+               < CLOSE_CALL * self.options.rival_significance for e in weighed[1:]):
+            self._level(fine=True)  # a close call: weigh again, finely
+            weighed = [self.evidence(p.T) for p in poses]
+        if self.options.method == "robust":
+            top = int(np.argmax([e.score for e in weighed]))
+            if top and self._better(weighed[top], weighed[0]):
+                poses = [polish(poses[top])] + poses[:top] + poses[top + 1:]
+                weighed = [self.evidence(poses[0].T)] + weighed[:top] + weighed[top + 1:]
+            wide = widen(poses[0]) if _misfit(weighed[0]) else poses[0]  # a clean view needs no second look
+            if _moved(wide.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
+                evidence = self.evidence(wide.T)
+                if self._better(evidence, weighed[0]):
+                    poses[0] = polish(wide)
+                    weighed[0] = self.evidence(poses[0].T)
+            # The best laid on the other face of the wall it sees, judged like every rival.
+            for other in through(poses[0]):
+                if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
+                    poses.append(other)
+                    weighed.append(self.evidence(other.T))
+        judged = [{"T": p.T, "evidence": e,
+                   "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if i else 0.0,
+                   "other_side": bool(i) and self._from_the_other_side(poses[0].T, p.T)}
+                  for i, (p, e) in enumerate(zip(poses, weighed))]
+        return poses[0], judged
+
+    def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
+        """Whether the rival, seen from the side of the part its own matched surface faces, would
+        explain the scan about as well as the best: it implies a viewpoint on the other side (a
+        thin wall, or a face laid inside out) and is not significantly worse by the scan points it
+        puts on the model.  The view evidence, judged from one side, cannot rule such a rival out
+        when the viewpoint is only estimated."""
+        if self.view is None or not self.source.startswith("estimated"):
+            return False
+        looks = []
+        weights = []
+        for T in (best, rival):
+            idx, found, r = self._lookup(T)
+            matched = found & (r < self.gate)
+            if matched.sum() < MIN_SCAN_POINTS:
+                return False
+            looks.append(visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3]))
+            weights.append(np.clip(1 - (r / self.gate) ** 2, 0, 1))
+        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
+                    < self.options.rival_significance)
+
+    def _better(self, evidence: visibility.Evidence, than: visibility.Evidence) -> bool:
+        return visibility.compare(evidence.cells, than.cells, CELL_VARIANCE_FLOOR) > self.options.rival_significance
+
+    def _distinct_under_symmetry(self, best, rivals) -> list:
+        """Rivals that no symmetry of the model maps onto the best or onto an earlier rival."""
+        if len(self.surface.symmetry_orders) == 0:
+            return rivals
+        kept = []
+        for r in rivals:
+            if not any(self.surface.maps_onto_itself(r.T @ frames.invert(k.T)) for k in [best] + kept):
+                kept.append(r)
+        return kept
+
+    def _lookup(self, T: np.ndarray):
+        """(nearest model sample, found, |point-to-plane residual|) of each sample point under T."""
+        moved = frames.apply(T, self.sample)
+        # The nearest sample may lie a spacing away along the surface from a point right on it.
+        _, idx, found = self.surface.nearest_cell(moved, self.gate + self.surface.spacing)
+        return idx, found, np.where(found, np.abs(self.surface.plane_residuals(moved, idx)), self.gate)
+
+    def _choose_view(self, poses, lookups) -> None:
+        """The viewpoint (given, or implied by the pose with the most scan points on the model) and
+        the scan seen from it; none when the matched normals face every way."""
+        top = int(np.argmax([np.sum(found & (r < self.gate)) for _, found, r in lookups]))
+        idx, found, r = lookups[top]
+        matched = found & (r < self.gate)
+        points = self.sample[matched]
+        if len(points) < MIN_SCAN_POINTS:
+            return
+        normals = self.surface.normals[idx[matched]] @ poses[top].T[:3, :3]  # model normals in the scan's frame
+        given = self.options.viewpoint
+        if given is not None:
+            away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
+            if away <= MAX_FACING_AWAY:
+                self._set_view(np.asarray(given, float), points.mean(axis=0), "given")
+                return
+            self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
+                                 f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
+                                 "estimated from the scan instead")
+        extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        viewpoint = points.mean(axis=0) + VIEW_DISTANCE_EXTENTS * extent * visibility.viewing_direction(normals)
+        away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
+        if away <= MAX_FACING_AWAY:
+            self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
+                                                           f"of its normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
+
+    def least_contradicted(self, T: np.ndarray) -> float:
+        """The smallest share of pose T's view contradicted, looking from the viewpoint and from
+        around it.  An estimated viewpoint is only good to some 30 degrees, and the real sensor saw
+        every scan point, so from where it was the right pose hides none: a pose is only found to
+        contradict the view when it does so from all around.  (The poses are still compared from
+        the one viewpoint: turning it for one pose would favour that pose.)"""
+        share = _contradicted(self.evidence(T))
+        if self.view is None or not self.source.startswith("estimated"):
+            return share
+        viewpoint, centre = self.viewpoint, self.target
+        distance = np.linalg.norm(viewpoint - centre)
+        for direction in visibility.cone((viewpoint - centre) / distance, SETTLE_STEP_DEG, rings=2)[1:]:
+            self._set_view(centre + distance * direction, centre, self.source)
+            share = min(share, _contradicted(self.evidence(T)))
+        self._set_view(viewpoint, centre, self.source)
+        return share
+
+    def _set_view(self, viewpoint, target, source: str) -> None:
+        self.viewpoint, self.target, self.source = viewpoint, target, source
+        self.view = visibility.ScanView.of(self.sample, visibility.View(viewpoint, target, self.pixel))
+
+    def evidence(self, T: np.ndarray, lookup=None) -> visibility.Evidence:
+        """The view evidence of pose T (scan -> model); without a view, each scan point's weight."""
+        idx, found, r = self._lookup(T) if lookup is None else lookup
+        weights = np.clip(1 - (r / self.gate) ** 2, 0, 1)
+        if self.view is None:
+            return visibility.Evidence(weights, 0, 0, int((weights > 0).sum()))
+        weights[visibility.facing(self.sample, self.surface.normals[idx] @ T[:3, :3], self.viewpoint)
+                <= visibility.FACING_COS] = 0.0
+        samples = self.view_samples
+        return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
+                                   self.surface.normals[samples] @ T[:3, :3], self.gate, self.gate + 2 * self.pixel,
+                                   OFF_BAND_GATES * self.gate)
+
+    def wall_thickness(self, T: np.ndarray, evidence: visibility.Evidence) -> float:
+        """Median thickness of the part where pose T explains the view (mm; inf without a view)."""
+        if self.view is None:
+            return float("inf")
+        samples = self.view_samples
+        thickness = visibility.wall_thickness(self.view.view, frames.apply(frames.invert(T), self.surface.points[samples]),
+                                              self.surface.normals[samples] @ T[:3, :3])[self.view.cells]
+        seen = thickness[evidence.cells > 0.5]
+        return float(np.median(seen)) if len(seen) else float("inf")
+
+    def viewpoint_info(self) -> dict:
+        """Where the poses were judged from, and how that viewpoint was found (for the result)."""
+        if self.view is None:
+            return {"position_mm": None, "source": "none",
+                    "note": "the matched surface faces every way (views merged into one cloud?): poses weighed by "
+                            "the scan points on the model, without visibility"}
+        return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
+
+
+def _widened(state, medium: np.ndarray, surface: SurfaceModel):
+    """The pose refined again from WIDER_GATE times its gate on a few points: one stage at the
+    wide gate, and only when that moved it, down to the fine gate again."""
+    gate = WIDER_GATE * state.gate
+    wide = refine(medium[:WIDER_POINTS], surface, state.T, gate, gate / 3, max_iterations=10, tolerance=1e-4)
+    if not _moved(wide.T, state.T, medium.mean(axis=0), state.gate):
+        return wide
+    return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
+
+
+def _contradicted(evidence: visibility.Evidence) -> float:
+    """Share of the cells the model covers that contradict it (hidden, missing, continued)."""
+    return float(np.count_nonzero(evidence.cells <= -0.5) / max(np.count_nonzero(evidence.cells), 1))
+
+
+def _misfit(evidence: visibility.Evidence) -> bool:
+    """Whether a pose's view shows signs of sitting a little off: MISFIT_SHARE of its cells
+    contradicted (hidden, missing, continued past its outline) or behind its surface."""
+    cells = max(int(np.count_nonzero(evidence.cells)), 1)
+    return (np.count_nonzero(evidence.cells <= -0.5) + evidence.off) >= MISFIT_SHARE * cells
+
+
+def _moved(T: np.ndarray, reference: np.ndarray, centre: np.ndarray, gate: float) -> bool:
+    """Whether two poses differ by more than a quarter of the gate at ``centre`` or 0.1 degrees."""
+    shift = np.linalg.norm(frames.apply(T, centre[None]) - frames.apply(reference, centre[None]))
+    return shift > 0.25 * gate or frames.rotation_between_deg(T, reference) > 0.1
+
+
+def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judged: list, judge: Judge,
              options: MatchOptions, voxel: float, result: dict, timer: PhaseTimer) -> MatchResult:
-    """Deviation statistics on the (sub)sampled scan points, stability, ambiguity and the status
-    with reasons; ``noise`` is the scan's own (pointops.surface_noise)."""
-    T, gate = best.T, best.gate
+    """Deviation statistics on the (sub)sampled scan points, stability, the view evidence of the
+    best pose and its rivals, the model's symmetries, and the status with reasons."""
+    T, gate, noise = best.T, best.gate, judge.scan_noise
     moved = frames.apply(T, sample)
     _, idx, found = surface.nearest_cell(moved, gate)
     deviation = surface.plane_residuals(moved[found], idx[found])
@@ -296,7 +646,12 @@ def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceMode
     for held in stab.get("held_by_edges", []):
         result["warnings"].append(f"{held['motion']} is held only by the model's edges: the data leave "
                                   f"+/-{held['slack_mm']:.3f} mm of play, the pose is centred in it")
-    reasons, status = [], OK
+    view = _view_summary(judged[0]["evidence"], judge)
+    reasons = []
+    if noise > options.tolerance_mm:
+        reasons.append(f"the scan's own noise is {noise:.2f} mm (scatter about local surface fits), more than the "
+                       f"{options.tolerance_mm:g} mm tolerance, so no fit can be checked to {options.tolerance_mm:g} mm "
+                       f"on this scan: give a tolerance of at least {noise:.2f} mm or use a less noisy sensor")
     if n_in < MIN_SCAN_POINTS or fitness < options.min_fitness:
         reasons.append(f"only {fitness:.1%} of the scan points lie on the model (at least "
                        f"{options.min_fitness:.0%} needed): the scan may not contain this model")
@@ -307,24 +662,50 @@ def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceMode
         reasons.append(f"the model does not fit the scan within its noise: residual scale {sigma:.2f} mm where "
                        f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
                        f"{options.tolerance_mm} mm tolerance): the scan may not contain this model")
-    if reasons:
-        status = FAILED
-    best_score = candidates[0][1]
-    listed = []
-    centre = surface.points.mean(axis=0)
-    for Tc, score in candidates:
-        listed.append({"matrix": frames.invert(Tc).tolist(), "score": float(score),
-                       "score_ratio": float(score / best_score) if best_score > 0 else 0.0,
-                       "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
-                       "shift_from_best_mm": float(np.linalg.norm(
-                           frames.apply(frames.invert(Tc), centre[None])[0]
-                           - frames.apply(frames.invert(T), centre[None])[0]))})
-    rivals = sorted((c for c in listed[1:] if c["score_ratio"] >= options.ambiguity_ratio),
-                    key=lambda c: -c["score_ratio"])
+    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+        view["contradicted_pct"] = 100 * judge.least_contradicted(T)
+    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+        reasons.append(f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view, from the viewpoint "
+                       f"and from up to {2 * SETTLE_STEP_DEG:g} degrees around it (at most {100 * MAX_CONTRADICTED:.0f} "
+                       f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
+                       "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
+    status = FAILED if reasons else OK
+    listed = _candidates(judged, surface, T)
+    rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
+              or c["from_the_other_side"]
+              or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
+    symmetries = surface.symmetries()
+    if status == OK and symmetries:
+        reasons.append("the model is symmetric: " + "; ".join(symmetries) + " (in the model's frame): no scan can tell "
+                       "these poses apart, U is one of them")
+    other_side = [c for c in rivals if c["from_the_other_side"]]
+    if status == OK and other_side:
+        reasons.append(f"{len(other_side)} pose(s) put about as many scan points on the model seen from the other side "
+                       f"of it (the closest {other_side[0]['rotation_from_best_deg']:.1f} deg away): which side of the "
+                       "part the scan shows cannot be told without the scanner's position (give it as viewpoint)")
+    rivals = [c for c in rivals if not c["from_the_other_side"]]
     if status == OK and rivals:
-        reasons.append(f"{len(rivals)} clearly different pose(s) fit almost as well (best rival "
-                       f"{rivals[0]['score_ratio']:.0%} of the best score, {rivals[0]['rotation_from_best_deg']:.1f} deg "
-                       "away): the part may be symmetric; see candidates")
+        r = min(rivals, key=lambda c: c["standard_errors_below_best"])
+        reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
+                       f"{r['rotation_from_best_deg']:.1f} deg away, scores {r['score_ratio']:.0%} of the best, only "
+                       f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
+                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm): the part may be nearly symmetric; see "
+                       "candidates")
+    if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
+        reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
+                       f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
+                       "the scan unexplained")
+    # Walls under two sample spacings are not resolved by the sampled model: only look for thinner ones.
+    resolved = THIN_WALL_NOISES * judge.noise > 2 * surface.spacing
+    thickness = judge.wall_thickness(T, judged[0]["evidence"]) if status == OK and resolved else float("inf")
+    if thickness < THIN_WALL_NOISES * judge.noise:
+        reasons.append(f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
+                       f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
+                       "cannot be told apart")
+    if status == OK and view.get("continued_pct", 0.0) > 100 * MAX_CONTINUED:
+        reasons.append(f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
+                       f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
+                       "or something lies flush with the part there")
     if status == OK and not stab["constrained"]:
         reasons.append("the matched surface does not fix every motion (under-constrained): free "
                        + "; ".join(stab["free_motions"]))
@@ -339,7 +720,51 @@ def _verdict(scan: Cloud, sample: np.ndarray, noise: float, surface: SurfaceMode
         percentiles_mm=percentiles,
         within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
         gate_mm=float(gate), n_inliers=int(round(fitness * len(scan))), iterations=int(best.iterations),
-        time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, **result)
+        time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, noise_mm=float(noise),
+        viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), **result)
+
+
+def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
+    """The poses weighed, best first, as the result lists them (U of each and how it compares)."""
+    best_score = judged[0]["evidence"].score
+    centre = surface.points.mean(axis=0)
+    listed = []
+    for entry in judged:
+        Tc, evidence = entry["T"], entry["evidence"]
+        listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
+                       "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
+                       "standard_errors_below_best": float(entry["z"]),
+                       "from_the_other_side": entry["other_side"],
+                       "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
+                       "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
+                       "shift_from_best_mm": float(np.linalg.norm(
+                           frames.apply(frames.invert(Tc), centre[None])[0]
+                           - frames.apply(frames.invert(T), centre[None])[0]))})
+    return listed
+
+
+def _view_summary(evidence: visibility.Evidence, judge: Judge) -> dict:
+    """How the best pose's view evidence reads: cells where the model is, the share contradicted."""
+    involved = evidence.cells != 0
+    summary = {"cells": int(involved.sum()), "explained_points": evidence.explained,
+               "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
+               "continued_cells": evidence.continued,
+               "evidence_gate_mm": judge.gate, "with_visibility": judge.view is not None}
+    if judge.view is not None and involved.any():
+        summary["contradicted_pct"] = float(100 * np.mean(evidence.cells[involved] <= -0.5))
+        summary["continued_pct"] = float(100 * evidence.continued / max(evidence.outline, 1))
+        summary["off_pct"] = float(100 * evidence.off / max(evidence.inside, 1))
+    return summary
+
+
+def _symmetry_list(surface: SurfaceModel) -> list:
+    """The model's symmetries for the result (model frame): axis, a point on it, order, words."""
+    from .symmetry import describe
+
+    return [{"axis": a.tolist(), "point_mm": p.tolist(), "order": int(n), "deviation_mm": float(d),
+             "description": describe(a, p, [n])[0]}
+            for a, p, n, d in zip(surface.symmetry_axes, surface.symmetry_points, surface.symmetry_orders,
+                                  surface.symmetry_deviations_mm)]
 
 
 def _coverage(matched: np.ndarray, surface: SurfaceModel, voxel: float) -> float:

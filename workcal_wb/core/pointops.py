@@ -149,13 +149,20 @@ def orient_along_tree(points: np.ndarray, normals: np.ndarray, k: int = 10) -> n
 def surface_noise(points: np.ndarray, rng: np.random.Generator, probes: int = 1000,
                   k: int = 12) -> tuple[float, float]:
     """The scan's own noise and the size of the patches it was measured on (mm): medians over random
-    patches of ``k`` neighbours of the RMS residual of a local quadric fit (so curvature does not
-    count as noise; degrees of freedom corrected) and of the patch radius."""
+    patches of ``k`` neighbours (see ``local_noise``)."""
+    _, noise, radius = local_noise(points, rng, probes, k)
+    return (float(np.median(noise)), float(np.median(radius))) if len(noise) else (float("inf"), 0.0)
+
+
+def local_noise(points: np.ndarray, rng: np.random.Generator, probes: int = 1000, k: int = 12):
+    """(indices of random probe points, the noise about each, the radius of its patch): the RMS
+    residual of a quadric fitted to the probe's ``k`` nearest neighbours (so curvature does not count
+    as noise; degrees of freedom corrected), per probe, so a caller can keep the probes on one object."""
     k = min(k, len(points))
     if k < 8:
-        return float("inf"), 0.0
-    probe = points[rng.choice(len(points), min(probes, len(points)), replace=False)]
-    radius, nb = cKDTree(points).query(probe, k)
+        return np.empty(0, np.int64), np.empty(0), np.empty(0)
+    chosen = rng.choice(len(points), min(probes, len(points)), replace=False)
+    radius, nb = cKDTree(points).query(points[chosen], k)
     patch = points[nb] - points[nb].mean(axis=1, keepdims=True)
     _, axes = np.linalg.eigh(np.einsum("nki,nkj->nij", patch, patch))
     h, u, v = np.moveaxis(np.einsum("nki,nij->nkj", patch, axes), 2, 0)  # height along the normal first
@@ -163,7 +170,7 @@ def surface_noise(points: np.ndarray, rng: np.random.Generator, probes: int = 10
     AtA = np.einsum("nki,nkj->nij", A, A) + 1e-9 * np.eye(6)
     coef = np.linalg.solve(AtA, np.einsum("nki,nk->ni", A, h)[..., None])[..., 0]
     residual = h - np.einsum("nki,ni->nk", A, coef)
-    return float(np.median(np.sqrt((residual**2).sum(axis=1) / (k - 6)))), float(np.median(radius[:, -1]))
+    return chosen, np.sqrt((residual**2).sum(axis=1) / (k - 6)), radius[:, -1]
 
 
 def orient_consistently(points: np.ndarray, normals: np.ndarray, k: int = 10) -> np.ndarray:

@@ -200,8 +200,10 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     fallback, rejected = None, None
     for members in _candidates(points, idx, labels, surface):
         result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
-        if result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]:
-            if result.status != FAILED and (rejected is None or result.fitness > rejected.fitness):
+        noisy = result.noise_mm > result.tolerance_mm  # failed only because the tolerance is below the noise
+        if (result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]
+                or noisy):
+            if (result.status != FAILED or noisy) and (rejected is None or result.fitness > rejected.fitness):
                 rejected = result
             continue
         if result.ok:
@@ -213,6 +215,10 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
 
 def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, tolerance_mm: float, role: str) -> str:
     """Why no object matched the model, as far as the objects' sizes and the best rejected match tell."""
+    if rejected is not None and rejected.noise_mm > tolerance_mm:
+        said = [r for r in rejected.reasons if "own noise" in r]
+        return f"the tolerance {tolerance_mm:g} mm is below the scan's noise: " + (said[0] if said else
+                                                                                  f"{rejected.noise_mm:.2f} mm")
     if rejected is not None and rejected.fitness >= MIN_FITNESS[role]:
         return (f"the best object fits the model with RMS {rejected.rms_mm:.3f} mm, but only "
                 f"{rejected.within_tolerance_pct:.0f}% of its points lie within the tolerance {tolerance_mm:g} mm "

@@ -39,7 +39,8 @@ MAX_OUTLINE_POINTS = 20000
 
 STATUS_TEXT = {
     OK: ("OK", "W can be used: both matches and every quality gate passed."),
-    AMBIGUOUS: ("AMBIGUOUS", "W is not unique: another pose fits almost as well. Check the candidates before use."),
+    AMBIGUOUS: ("AMBIGUOUS", "W is not sure: the part is symmetric, another pose fits almost as well, or the scan "
+                             "leaves part of the view unexplained (see the reasons). Check before use."),
     FAILED: ("FAILED", "Do not use W: the calibration failed its checks."),
 }
 
@@ -268,11 +269,33 @@ def _matches_html(calibration: CalibrationResult) -> str:
         *[(f"{q}th percentile |deviation| (mm)", lambda m, q=q: _num(m.percentiles_mm.get(str(q))))
           for q in PERCENTILES],
         ("within tolerance", lambda m: f"{m.within_tolerance_pct:.1f} % (of inliers, {m.tolerance_mm:g} mm)"),
+        ("scan noise (mm, on the part)", lambda m: _num(m.noise_mm)),
+        ("viewpoint", lambda m: _e(m.viewpoint.get("source", "-")) if m.viewpoint else "-"),
+        ("view contradicted by the pose", lambda m: f"{m.view['contradicted_pct']:.1f} %"
+         if "contradicted_pct" in m.view else "-"),
         ("final gate (mm)", lambda m: _num(m.gate_mm)), ("iterations", lambda m: _num(m.iterations)),
         ("time (s)", lambda m: _num(m.time_s, 2)),
     ]
     rows = [[_e(label)] + [("-" if m is None else getter(m)) for _, m in matches] for label, getter in fields]
     return _table(rows, ["", *(name for name, _ in matches)])
+
+
+def _symmetry_sentences(calibration: CalibrationResult) -> list[str]:
+    """One sentence per model symmetry of either match: "The workpiece model is symmetric: turning the
+    part 90 degrees about its axis ... gives the same surface." """
+    out = []
+    for role, m in (("workpiece", calibration.workpiece), ("reference", calibration.reference)):
+        for symmetry in (m.symmetries if m is not None else []):
+            out.append(f"The {role} model is symmetric: {symmetry['description']} (axis in the model's frame), so "
+                       f"no scan can tell those poses apart.")
+    return out
+
+
+def _symmetry_html(calibration: CalibrationResult) -> str:
+    sentences = _symmetry_sentences(calibration)
+    if not sentences:
+        return ""
+    return "<h2>Symmetry</h2><ul>" + "".join(f"<li>{_e(s)}</li>" for s in sentences) + "</ul>"
 
 
 def _gates_html(calibration: CalibrationResult) -> str:
@@ -350,6 +373,7 @@ def _calibration_body(calibration: CalibrationResult, deviation, images, asked: 
             + f"<h2>Transformations</h2><div class='poses'>{poses}</div>"
             + "<p class='note'>Lengths in mm, angles in degrees; matrices act on column vectors (p_B = W p_X). "
               "The paper's Table 1 prints the inverse of W (U^-1 V), which has the same Omega.</p>"
+            + _symmetry_html(calibration)
             + "<h2>Residuals of the matches</h2>" + _matches_html(calibration)
             + "<h2>Quality gates</h2>" + _gates_html(calibration)
             + "<h2>Uncertainty</h2>" + _uncertainty_html(calibration)

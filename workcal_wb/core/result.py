@@ -134,10 +134,14 @@ class MatchResult:
     time_s: float = 0.0
     timings_s: dict = field(default_factory=dict)  # wall time per phase
     stability: dict = field(default_factory=dict)
-    candidates: list = field(default_factory=list)
+    candidates: list = field(default_factory=list)  # poses weighed, best first, distinct under the model's symmetries
     warnings: list = field(default_factory=list)
     reasons: list = field(default_factory=list)
     seed: int = 0
+    noise_mm: float = float("nan")  # the scan's own noise (scatter about local surface fits)
+    viewpoint: dict = field(default_factory=dict)  # the sensor position the view was judged from, and its source
+    view: dict = field(default_factory=dict)  # the best pose's view evidence: cells, hidden points, missing cells
+    symmetries: list = field(default_factory=list)  # the model's own: axis, point_mm, order (0: any angle), description
 
     def __post_init__(self):
         if self.status not in STATUSES:
@@ -179,7 +183,8 @@ class MatchResult:
                          f"translation {t[0]:.3f} {t[1]:.3f} {t[2]:.3f} mm")
             lines.append(f"  RMS {self.rms_mm:.3f} mm, mean Hausdorff {self.mean_directed_hausdorff_mm:.3f} mm, "
                          f"fitness {self.fitness:.1%}, coverage {self.coverage:.1%}, "
-                         f"{self.within_tolerance_pct:.1f}% within {self.tolerance_mm} mm")
+                         f"{self.within_tolerance_pct:.1f}% within {self.tolerance_mm} mm, scan noise {self.noise_mm:.3f} mm")
+        lines += [f"  symmetry: {s['description']}" for s in self.symmetries]
         lines += [f"  reason: {r}" for r in self.reasons] + [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -233,6 +238,7 @@ class CalibrationResult:
                 lines.append(f"  {role}: {m.status}, RMS {m.rms_mm:.3f} mm, mean Hausdorff "
                              f"{m.mean_directed_hausdorff_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
                              f"{m.tolerance_mm} mm, {m.n_inliers} points")
+                lines += [f"  {role} model symmetry: {s['description']}" for s in m.symmetries]
         for key, words in (("toolpath_bound_mm", "at the toolpath"), ("surface_bound_mm", "at the workpiece surface")):
             if key in self.uncertainty:
                 lines.append(f"  uncertainty {words}: {self.uncertainty[key]:.4f} mm "

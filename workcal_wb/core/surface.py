@@ -2,9 +2,12 @@
 
 A mesh is matched as a surface: every sample carries its face's plane, so the point-to-plane
 residual against the nearest sample is the distance to the model surface itself, not to a vertex.
-A point-cloud model (no faces) uses its points with PCA normals.  What a match needs again and
-again is kept here, per model: the coarse points and FPFH features of the global search, and the
-cell grids (the paper's space binning) that make a nearest-sample lookup one array access.
+A point-cloud model (no faces) uses its points with their normals, or PCA normals turned outward.
+What a match needs again and again is kept here, per model: the model's own symmetries and the
+near-symmetric turns a match tries (symmetry.py), the samples a view is rendered from
+(visibility.py), the coarse points and FPFH features of the global search, and the cell grids (the
+paper's space binning) that make a nearest-sample lookup one array access.  What the constructor
+computes is plain numpy arrays and numbers, so a cache of prepared models can store them.
 """
 from __future__ import annotations
 
@@ -26,6 +29,9 @@ _UNKNOWN, _FAR = -2, -1
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
 # level doubles both, so a loose gate does not fill a fine grid far from the surface.
 GATE_CELLS = 16
+# A turn maps the model onto itself (a symmetry) when it moves its surface by less than this
+# fraction of the model diagonal (0.1 mm on a 100 mm part), plus three times the model's own noise.
+SYMMETRY_TOLERANCE_FRACTION = 1e-3
 
 
 class NearestGrid:
@@ -87,9 +93,14 @@ class NearestGrid:
 
 
 class SurfaceModel:
-    """Samples (mm) with unit outward normals and a KD-tree; coarse features cached per voxel size."""
+    """Samples (mm) with unit outward normals and a KD-tree, the model's symmetries; coarse features
+    cached per voxel size.
 
-    def __init__(self, model: Cloud, seed: int = 0):
+    ``symmetry_tolerance_mm`` (default: SYMMETRY_TOLERANCE_FRACTION of the diagonal plus three times
+    the model's own noise) is how far a turn may move the surface and still count as a symmetry.
+    """
+
+    def __init__(self, model: Cloud, seed: int = 0, symmetry_tolerance_mm: float | None = None):
         if len(model) < 3 or shape_kind(model.points) != "solid":
             kind = "too small" if len(model) < 3 else shape_kind(model.points)
             raise InputError(f"{model.name}: the model is {kind}; a pose cannot be fitted to it")
@@ -104,17 +115,54 @@ class SurfaceModel:
             if pointops.signed_volume(model.points, model.triangles) < 0:
                 self.face_normals = -self.face_normals  # wound inward (e.g. the Stanford bunny): make them outward
             normals = self.face_normals[face_ids]
+            # Each sample stands for its share of its face (small faces get one sample each).
+            area = pointops.triangle_normals_and_areas(model.points, model.triangles)[1]
+            weights = area[face_ids] / np.bincount(face_ids, minlength=len(area))[face_ids]
         else:
             points = model.points
             spacing = pointops.median_spacing(points)
-            normals = model.normals if model.normals is not None else pointops.estimate_normals(points, 3 * spacing)
-            normals = pointops.orient_outward(points, normals)
+            if model.normals is not None:  # a file's normals say which side is out: keep them
+                normals = model.normals / np.maximum(np.linalg.norm(model.normals, axis=1), 1e-12)[:, None]
+            else:
+                normals = pointops.orient_outward(points, pointops.estimate_normals(points, 3 * spacing))
+            weights = np.ones(len(points))
         self.points, self.normals, self.spacing = points, normals, spacing
         self.tree = cKDTree(points)
         self.vertices = model.points
         self.triangles = model.triangles
+        rng = np.random.default_rng(seed)
+        # A mesh is exact; a point model scatters about its surface like a scan.
+        self.noise_mm = 0.0 if model.is_mesh else pointops.surface_noise(points, rng)[0]
+        self.view_order = rng.permutation(len(points))  # views are rendered from its first samples
+        if symmetry_tolerance_mm is None:
+            symmetry_tolerance_mm = float(np.hypot(SYMMETRY_TOLERANCE_FRACTION * self.diagonal, 3 * self.noise_mm))
+        self.symmetry_tolerance_mm = symmetry_tolerance_mm
+        from . import symmetry
+
+        found = symmetry.find(points, normals, weights, self.tree, spacing, self.diagonal, symmetry_tolerance_mm, seed)
+        self.symmetry_axes, self.symmetry_points = found["axes"], found["points"]
+        self.symmetry_orders, self.symmetry_deviations_mm = found["orders"], found["deviations_mm"]
+        self.flips = found["flips"]
         self._coarse = {}
         self._grids: dict[int, NearestGrid] = {}
+
+    def symmetries(self) -> list[str]:
+        """The model's symmetries in words (model frame), e.g. "turning the part 90 degrees about its
+        axis ... gives the same surface"; empty when it has none."""
+        from .symmetry import describe
+
+        return describe(self.symmetry_axes, self.symmetry_points, self.symmetry_orders)
+
+    def maps_onto_itself(self, T: np.ndarray) -> bool:
+        """Whether the rigid motion T (model frame) moves the surface onto itself within the
+        symmetry tolerance: two poses differing by such a T cannot be told apart by any scan."""
+        return self._self_match.maps(T)[0]
+
+    @cached_property
+    def _self_match(self):
+        from .symmetry import SelfMatch
+
+        return SelfMatch(self.points, self.normals, self.tree, self.spacing, self.diagonal, self.symmetry_tolerance_mm)
 
     def nearest(self, points: np.ndarray, gate: float):
         """(distance, sample index, found) for each point, searching only within ``gate`` mm."""
@@ -181,18 +229,6 @@ class SurfaceModel:
             normals[np.einsum("ij,ij->i", normals, self.normals[rep]) < 0] *= -1
             self._coarse[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._coarse[key]
-
-    @cached_property
-    def symmetry_flips(self) -> np.ndarray:
-        """(3, 4, 4) half turns about the principal axes of the surface through its centroid: the
-        self-maps of a box, an ellipsoid or a cylinder, tried to expose a symmetric twin pose."""
-        centre = self.points.mean(axis=0)
-        _, axes = np.linalg.eigh(np.cov((self.points - centre).T))
-        flips = np.tile(np.eye(4), (3, 1, 1))
-        for k in range(3):
-            R = 2 * np.outer(axes[:, k], axes[:, k]) - np.eye(3)  # 180 degrees about axis k
-            flips[k, :3, :3], flips[k, :3, 3] = R, centre - R @ centre
-        return flips
 
     @cached_property
     def _bvh(self):

@@ -106,12 +106,13 @@ BUNNY_SCANS = ("bun000.ply", "bun045.ply", "bun090.ply", "bun180.ply", "bun270.p
 BUNNY_UP = np.array([0.0, 1.0, 0.0])  # the bunny model stands along +y
 
 
-def bunny_reference_poses(folder: Path) -> dict[str, np.ndarray]:
-    """scan -> model transforms from bun.conf: p_model = R(q)^T p_scan + t (see the data README)."""
+def bunny_reference_poses(folder: Path, conf: str = "bun.conf") -> dict[str, np.ndarray]:
+    """scan -> model transforms from a Stanford .conf file: p_model = R(q)^T p_scan + t (see the
+    data README); the same reading holds for the dragon's dragonStandRight.conf."""
     from scipy.spatial.transform import Rotation
 
     poses = {}
-    for line in (folder / "bun.conf").read_text().splitlines():
+    for line in (folder / conf).read_text().splitlines():
         fields = line.split()
         if fields and fields[0] == "bmesh":
             t = np.array(fields[2:5], float) * 1000.0

@@ -147,6 +147,26 @@ class Scanner:
         return cls(position, target, pixel_pitch_mm=pitch, image_size=image_size, **settings)
 
 
+def scan_part(mesh: Cloud, pose: np.ndarray, direction, distance_mm: float = 600.0, samples: int = 20000,
+              **settings) -> "ScanResult":
+    """One capture of ``mesh`` alone (no platform, no reference) placed at ``pose`` (^B X), by a
+    scanner ``distance_mm`` from its middle along ``direction`` (towards the scanner, in B), zoomed
+    so that about ``samples`` pixels fall on a square the size of the part's diagonal.  ``settings``
+    go to the Scanner (noise_sigma_mm, z_resolution_mm, seed, ...)."""
+    from .scene import object_scene
+
+    placed = frames.apply(pose, mesh.points)
+    centre = 0.5 * (placed.min(axis=0) + placed.max(axis=0))
+    direction = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    size = float(np.linalg.norm(placed.max(axis=0) - placed.min(axis=0)))
+    pitch = size / np.sqrt(samples)
+    side = int(1.2 * size / pitch) + 8
+    up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.9 else (1.0, 0.0, 0.0)
+    scanner = Scanner(centre + distance_mm * direction, centre, up=up, pixel_pitch_mm=pitch, image_size=(side, side),
+                      **settings)
+    return scanner.scan(object_scene(mesh, pose))
+
+
 def _all_triangles_in(scene, S_B: np.ndarray):
     """Every object's vertices moved into S, their triangles re-indexed into one list, and each
     triangle's object index."""

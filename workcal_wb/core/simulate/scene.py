@@ -173,3 +173,10 @@ def build_scene(workpiece="car", workpiece_pose=None, seed: int = 0, clutter: bo
     scanned = reshaped.mesh if reshaped else model
     objects.append(SceneObject(model.name, scanned, workpiece_pose, "workpiece"))
     return Scene(objects, model, upright, reshaped, seed)
+
+
+def object_scene(mesh: Cloud, pose=None) -> Scene:
+    """The mesh alone, as the workpiece, at ``pose`` (^B X, default identity): for scanning one part
+    from any side, without platform or reference in the way."""
+    pose = np.eye(4) if pose is None else frames.as_transform(pose, "object pose")
+    return Scene([SceneObject(mesh.name, mesh, pose, "workpiece")], mesh, np.eye(4))

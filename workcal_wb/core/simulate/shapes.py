@@ -1,9 +1,10 @@
 """Procedural, deterministic test objects as closed, outward-wound triangle meshes (mm).
 
-Three builders make every shape watertight by construction: a pole-to-pole (theta, phi) grid for
+Four builders make every shape watertight by construction: a pole-to-pole (theta, phi) grid for
 smooth star-shaped or parametric bodies, a revolved profile for surfaces of revolution (corners kept
-as sharp edges), and the boundary of a union of grid cells for flat-faced blocks (exactly planar
-faces, sharp edges, vertices shared along every edge).  ``edge_mm`` sets the mesh resolution: the
+as sharp edges), the boundary of a union of grid cells for flat-faced blocks (exactly planar
+faces, sharp edges, vertices shared along every edge), and a straight prism over a star-shaped
+outline (round or slanted walls with sharp edges).  A block can also be bent into a shell.  ``edge_mm`` sets the mesh resolution: the
 typical triangle edge; the meshes are accurate surfaces, not just point sets.
 
 The workpieces (car, figurine) are returned in an arbitrary model frame X (rotated and off-origin,
@@ -138,6 +139,46 @@ def _cell_union(breaks: list, inside, edge_mm: float, name: str) -> Cloud:
     used, triangles = np.unique(triangles, return_inverse=True)
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return Cloud(grid[used], triangles=triangles.reshape(-1, 3), name=name)
+
+
+def _prism(outline, length: float, edge_mm: float, name: str) -> Cloud:
+    """A straight prism along z, from 0 to ``length``, over a closed outline in the xy plane.
+
+    ``outline`` is a counter-clockwise polygon (n, 2), star-shaped about the mean of its vertices:
+    its edges are cut into pieces of at most ``edge_mm``, the walls into rows of that height, and each
+    cap is a fan from that mean, so the caps are exactly planar and meet the walls in sharp edges.
+    """
+    outline = np.asarray(outline, dtype=float)
+    ring = np.vstack([a + np.outer(np.arange(k) / k, b - a) for a, b in zip(outline, np.roll(outline, -1, axis=0))
+                      for k in [max(1, int(np.ceil(np.linalg.norm(b - a) / edge_mm)))]])
+    centre = ring.mean(axis=0)
+    spokes = ring - centre
+    if (spokes[:, 0] * np.roll(spokes[:, 1], -1) - spokes[:, 1] * np.roll(spokes[:, 0], -1)).min() <= 0:
+        raise ValueError(f"{name}: the outline must run counter-clockwise and be star-shaped about its middle")
+    n = len(ring)
+    levels = np.linspace(0.0, length, max(1, int(np.ceil(length / edge_mm))) + 1)
+    points = np.vstack([np.column_stack([np.tile(ring, (len(levels), 1)), np.repeat(levels, n)]),
+                        [[*centre, 0.0], [*centre, length]]])
+    i = np.arange(n)
+    j = (i + 1) % n
+    faces = []
+    for row in range(len(levels) - 1):  # wall quads, outward for a counter-clockwise outline
+        a, b, c, d = row * n + i, row * n + j, (row + 1) * n + j, (row + 1) * n + i
+        faces += [np.column_stack([a, b, c]), np.column_stack([a, c, d])]
+    top = (len(levels) - 1) * n
+    faces += [np.column_stack([np.full(n, len(points) - 2), j, i]),  # bottom cap, facing -z
+              np.column_stack([np.full(n, len(points) - 1), top + i, top + j])]
+    return Cloud(points, triangles=np.vstack(faces), name=name)
+
+
+def _bent(mesh: Cloud, radius: float, name: str) -> Cloud:
+    """The mesh bent about an axis parallel to y, ``radius`` mm below z = 0: x becomes arc length
+    along the bend, z the distance outside it (an orientation-preserving map, so it stays closed and
+    outward; faces must be small against the radius)."""
+    x, y, z = mesh.points.T
+    angle, reach = x / radius, radius + z
+    points = np.column_stack([reach * np.sin(angle), y, reach * np.cos(angle) - radius])
+    return Cloud(points, triangles=mesh.triangles, name=name)
 
 
 def _ellipsoid_radius(d: np.ndarray, centre, radii) -> np.ndarray:
@@ -284,3 +325,73 @@ def ellipsoid(radii=(60.0, 40.0, 25.0), edge_mm: float = 2.0) -> Cloud:
                          c * np.cos(theta)], axis=-1)
 
     return _parametric(surface, edge_mm, "ellipsoid")
+
+
+# ----------------------------------------------------------------------------------------------
+# Near-symmetric and symmetric parts for the verdict (natural frames)
+# ----------------------------------------------------------------------------------------------
+
+def plate(length: float = 120.0, width: float = 80.0, thickness: float = 6.0, notch=(24.0, 10.0),
+          notch_offset: float = 14.0, rebate=None, edge_mm: float = 2.0, name: str = "plate") -> Cloud:
+    """A flat plate, centred in x and y on z = 0, whose outline is nearly mirror symmetric.
+
+    ``notch`` (length, depth) is cut into the +y long edge with its middle ``notch_offset`` mm off the
+    plate's middle; ``rebate`` (width, depth), if given, is a step along the -y edge of the top face,
+    so front and back outlines differ only there.  Turned over or turned about its normal the plate
+    covers nearly the same rectangle: the near-symmetric flips a scan of one side must tell apart.
+    """
+    hx, hy = length / 2, width / 2
+    x = [-hx, hx]
+    y = [-hy, hy]
+    z = [0.0, thickness]
+    if notch is not None:
+        x = [-hx, notch_offset - notch[0] / 2, notch_offset + notch[0] / 2, hx]
+        y = [-hy, hy - notch[1], hy]
+    if rebate is not None:
+        y = sorted(set(y) | {-hy + rebate[0]})
+        z = [0.0, thickness - rebate[1], thickness]
+
+    def inside(px, py, pz):
+        solid = np.ones(px.shape, dtype=bool)
+        if notch is not None:
+            solid &= ~((np.abs(px - notch_offset) < notch[0] / 2) & (py > hy - notch[1]))
+        if rebate is not None:
+            solid &= ~((py < -hy + rebate[0]) & (pz > thickness - rebate[1]))
+        return solid
+
+    return _cell_union([x, y, z], inside, edge_mm, name)
+
+
+def boss_plate(size: float = 80.0, thickness: float = 8.0, boss: float = 30.0, boss_height: float = 6.0,
+               edge_mm: float = 2.0) -> Cloud:
+    """A square plate (centred, on z = 0) with a square boss in the middle of its top: a quarter turn
+    about its normal maps it onto itself (4-fold symmetry); turning it over does not."""
+    h, b = size / 2, boss / 2
+    return _cell_union([[-h, -b, b, h], [-h, -b, b, h], [0.0, thickness, thickness + boss_height]],
+                       lambda x, y, z: (z < thickness) | ((np.abs(x) < b) & (np.abs(y) < b)), edge_mm, "boss plate")
+
+
+def peg(radius: float = 10.0, length: float = 60.0, chamfer: float = 2.0, edge_mm: float = 1.5) -> Cloud:
+    """A round peg along z on z = 0 with its top end chamfered: any turn about its axis maps it onto
+    itself, and end over end it nearly does (only the chamfer tells the ends apart)."""
+    r, top = radius, length
+    return _revolve([[(0.0, top), (r - chamfer, top)], [(r - chamfer, top), (r, top - chamfer)],
+                     [(r, top - chamfer), (r, 0.0)], [(r, 0.0), (0.0, 0.0)]], edge_mm, "peg")
+
+
+def d_shaft(radius: float = 12.0, length: float = 100.0, flat: float = 3.0, edge_mm: float = 2.0) -> Cloud:
+    """A shaft along z (0 to ``length``) with a flat ``flat`` mm deep ground along its length on the +y
+    side (a D profile): the flat stops it turning about its axis, and only a half turn about the
+    flat's normal (end over end) maps it onto itself."""
+    half = np.arccos((radius - flat) / radius)
+    t = np.linspace(np.pi / 2 + half, 2.5 * np.pi - half, max(8, int(np.ceil(2 * np.pi * radius / edge_mm))))
+    return _prism(radius * np.column_stack([np.cos(t), np.sin(t)]), length, edge_mm, "D shaft")
+
+
+def shell(length: float = 140.0, width: float = 90.0, thickness: float = 4.0, bend_radius: float = 110.0,
+          notch=(22.0, 9.0), notch_offset: float = 16.0, edge_mm: float = 2.0) -> Cloud:
+    """A curved tile: a notched plate (see ``plate``) bent about the y axis with its inner face
+    ``bend_radius`` mm from the axis, its outer face convex.  Front and back differ in curvature,
+    and turned about its normal only the notch tells it apart."""
+    flat = plate(length, width, thickness, notch, notch_offset, edge_mm=edge_mm)
+    return _bent(flat, bend_radius, "shell")
