@@ -1,6 +1,6 @@
 """The verdicts table: for each status a match reports, how often its pose was right.
 
-Real scans: the Stanford dragon stand scans in the repository (data/stanford-dragon-stand, each scan
+Real scans: the Stanford dragon stand scans in the repository (tests/data/stanford-dragon-stand, each scan
 matched against the other 14 aligned into one cloud) and, when ../shared is there, the Stanford bunny
 scans against bun_zipper, also with 1 mm of noise added at a tolerance below and above it.  Simulated:
 parts that are nearly symmetric (flat plates whose outline or faces differ a little, a curved tile, a
@@ -23,7 +23,7 @@ from .. import frames, pointops
 from ..geometry import Cloud
 from .cases import BUNNY_SCANS, bunny_reference_poses, random_motion
 
-DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "data" / "stanford-dragon-stand"
+DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
 RIGHT_MM = 1.0
 # The dragon model (the other scans) is thinned to this voxel (mm): its spacing, a little above the scans'.
 DRAGON_MODEL_VOXEL_MM = 1.5
@@ -214,7 +214,7 @@ def table(rows: list[VerdictRow], seed: int) -> tuple[str, list]:
              f"Written by `make bench` (or `python3 -m workcal_wb bench --only verdicts`), seed {seed}. Every case is "
              "matched without a guess (`match`, each model prepared once) and its pose judged against the truth: right "
              f"when the model, moved by truth^-1 U, lies on itself within {RIGHT_MM:g} mm (so a symmetric part is "
-             "right up to its symmetry). Real scans: the Stanford dragon stand scans in `data/stanford-dragon-stand` "
+             "right up to its symmetry). Real scans: the Stanford dragon stand scans in `tests/data/stanford-dragon-stand` "
              "(each against the other 14 aligned by `dragonStandRight.conf`, the viewpoint estimated), and the "
              "Stanford bunny scans from ../shared against `bun_zipper.ply`, also with 1 mm of noise added. Simulated: "
              "nearly symmetric and symmetric parts seen alone from random views (`core/benchmark/verdicts.py`). "
