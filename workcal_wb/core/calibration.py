@@ -31,6 +31,10 @@ class CalibrationOptions:
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
     seed: int = 0
+    # Where the scanner stood and which way is up, in the scan's frame (mm; a direction), when the user
+    # knows; otherwise the scan's file tells the scanner's position, or both come from the data.
+    scanner_origin: tuple | None = None
+    up: tuple | None = None
 
     def __post_init__(self):
         if not (isinstance(self.tolerance_mm, (int, float)) and math.isfinite(self.tolerance_mm)
@@ -42,6 +46,15 @@ class CalibrationOptions:
             raise InputError(f"resamples must be a whole number of at least 1, not {self.resamples}")
         if not (isinstance(self.seed, int) and 0 <= self.seed < 2**63):
             raise InputError(f"seed must be a whole number from 0 to 2**63 - 1, not {self.seed}")
+        for name, words in (("scanner_origin", "three finite coordinates in mm"),
+                            ("up", "three finite numbers, not all zero (a direction)")):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            vector = np.asarray(value, dtype=float) if np.shape(value) == (3,) else None
+            if vector is None or not np.isfinite(vector).all() or (name == "up" and not np.linalg.norm(vector) > 0):
+                raise InputError(f"{name.replace('_', ' ')} must be {words}, not {value!r}")
+            object.__setattr__(self, name, tuple(float(v) for v in vector))
 
 
 # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
@@ -79,7 +92,8 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     if regions is None:
         try:
             found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
-                           progress=lambda f, m: report(0.6 * f, m))
+                           progress=lambda f, m: report(0.6 * f, m), up=options.up,
+                           viewpoint=scanner_origin(scan, options))
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
             return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
                                      tolerance_mm=options.tolerance_mm, seed=options.seed,
@@ -124,6 +138,15 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                              time_s=time.perf_counter() - started, **result)
 
 
+def scanner_origin(scan: Cloud, options: CalibrationOptions):
+    """The scanner's position in the scan's frame, when the user or the file tells one position."""
+    if options.scanner_origin is not None:
+        return np.asarray(options.scanner_origin)
+    if scan.sensors is not None and len(scan.sensors) == 1:
+        return scan.sensors[0]
+    return None
+
+
 def merge_scans(scans) -> Cloud:
     """Captures from one scanner position, as one cloud; captures in different units are refused."""
     clouds = [scans] if isinstance(scans, Cloud) else list(scans)
@@ -139,7 +162,13 @@ def merge_scans(scans) -> Cloud:
     if len(clouds) == 1:
         return clouds[0]
     points = np.vstack([c.points for c in clouds])
-    return Cloud(points, name=" + ".join(c.name for c in clouds), warnings=[w for c in clouds for w in c.warnings])
+    sensors, sensor_of = None, None
+    if all(c.sensors is not None for c in clouds):  # each capture's own sensor positions, numbered on
+        offsets = np.cumsum([0] + [len(c.sensors) for c in clouds])
+        sensors = np.vstack([c.sensors for c in clouds])
+        sensor_of = np.concatenate([c.sensor_indices() + k for c, k in zip(clouds, offsets)])
+    return Cloud(points, name=" + ".join(c.name for c in clouds), warnings=[w for c in clouds for w in c.warnings],
+                 sensors=sensors, sensor_of=sensor_of)
 
 
 def _checked_toolpath(points, surface: SurfaceModel) -> np.ndarray:

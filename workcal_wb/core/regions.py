@@ -21,9 +21,17 @@ from .match import match
 from .result import FAILED, MatchResult
 from .surface import SurfaceModel
 
-# The platform must hold at least this fraction of the scan to count as one.
-MIN_PLATFORM_FRACTION = 0.15
-PLANE_RANSAC_TRIALS = 300
+# The platform must hold at least this fraction of the scan to count as one (a dark table returns few
+# points); and, when its up side comes from the data (_up_side), at least SUPPORTED_SHARE of the points
+# off it must lie over it, UP_SIDE_SHARE of those over its hull less the margin on one side.
+MIN_PLATFORM_FRACTION = 0.05
+SUPPORTED_SHARE, UP_SIDE_SHARE, ALL_ON_ONE_SIDE = 0.5, 0.8, 0.9
+# The largest planes tried in turn (most points first) until one is the platform.
+PLATFORM_CANDIDATES = 5
+HULL_MARGIN_MM, HULL_MARGIN_SPACINGS = 5.0, 10.0
+# A given up direction picks the largest plane within this angle of square to it.
+MAX_UP_DEG = 30.0
+PLANE_RANSAC_TRIALS = 2000
 PLANE_SAMPLE_POINTS = 5000
 # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
 PLATFORM_BAND_MM = 1.0
@@ -58,22 +66,27 @@ class Located:
     workpiece_match: MatchResult
     reference_match: MatchResult
     warnings: list
+    plane: "Platform | None" = None
 
     def as_dict(self) -> dict:
         return {"workpiece": self.workpiece, "reference": self.reference, "platform": self.platform,
                 "source": "auto", "warnings": list(self.warnings)}
 
 
-def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0) -> dict:
+def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0, up=None,
+                 viewpoint=None) -> dict:
     """The workpiece, reference and platform regions of ``scan`` as index arrays (see ``locate``)."""
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, seed) for m in (workpiece, reference)]
-    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed).as_dict()
+    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed, up=up, viewpoint=viewpoint).as_dict()
 
 
 def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
-           seed: int = 0, progress=None) -> Located:
+           seed: int = 0, progress=None, up=None, viewpoint=None) -> Located:
     """Find the reference and the workpiece in a scene scan; NotFound names what could not be found
-    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise)."""
+    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise).
+
+    The scan may be in any frame: ``up`` (a direction) and ``viewpoint`` (the scanner's position),
+    when known, say which side of the platform the objects stand on; otherwise the data do."""
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
@@ -85,13 +98,13 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     rng = np.random.default_rng(seed)
     spacing = pointops.median_spacing(points[valid], seed=seed)
     warnings = []
-    platform = _platform(points[valid], spacing, rng)
+    platform = find_platform(points[valid], spacing, rng, up, viewpoint)
     if platform is None:
         warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
-                        "points); every point is treated as an object")
+                        "points with the objects standing on one side of it); every point is treated as an object")
         platform_idx, objects = np.empty(0, dtype=np.int64), valid
     else:
-        platform_idx, objects = valid[platform], valid[~platform]
+        platform_idx, objects = valid[platform.below], valid[~platform.below]
     labels = _clusters(points[objects], LINK_SPACINGS * spacing)
     report = progress or (lambda fraction, message: None)
 
@@ -116,7 +129,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
     on_workpiece = _on_model(points[rest], rest_labels, workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
     workpiece_idx = rest[on_workpiece.clusters]
-    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings)
+    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform)
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str) -> MatchResult:
@@ -133,32 +146,106 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str)
     return best
 
 
-def _platform(points: np.ndarray, spacing: float, rng: np.random.Generator) -> np.ndarray | None:
-    """Mask of the points on or below the largest plane, if it is large enough to be the platform.
+@dataclass
+class Platform:
+    """The plane the objects stand on: a point on it, its unit normal pointing up (to the side the
+    objects stand on), the mask of the points on or below it, and how "up" was told."""
 
-    "Below" is the side away from the scanner (the origin of S): nothing seen there can be an
-    object standing on the platform."""
+    centre: np.ndarray
+    up: np.ndarray
+    below: np.ndarray
+    band: float
+    source: str
+
+    def height(self, points: np.ndarray) -> np.ndarray:
+        return (points - self.centre) @ self.up
+
+
+def find_platform(points: np.ndarray, spacing: float, rng: np.random.Generator, up=None,
+                  viewpoint=None) -> Platform | None:
+    """The largest plane the objects stand on, if there is one (see ``_up_side``), in any frame.
+
+    ``up`` (a direction the user gives) picks the largest plane square to it within MAX_UP_DEG;
+    otherwise the plane holding the most points.  Which side is up: ``up``, else the side the
+    ``viewpoint`` (the scanner's position, given or read from the file) is on, else the side the
+    objects stand on (_up_side)."""
     sample = points[rng.choice(len(points), min(len(points), PLANE_SAMPLE_POINTS), replace=False)]
     band = PLATFORM_BAND_MM + 2 * spacing
     triples = sample[rng.integers(0, len(sample), (PLANE_RANSAC_TRIALS, 3))]
     normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
     length = np.linalg.norm(normals, axis=1)
     keep = length > 1e-9
-    if not keep.any():  # every sampled triple is collinear: there is no plane at all
+    if up is not None:
+        up = np.asarray(up, dtype=float) / np.linalg.norm(up)
+        keep &= np.abs(normals @ up) > np.cos(np.radians(MAX_UP_DEG)) * np.maximum(length, 1e-12)
+    if not keep.any():  # every sampled triple is collinear (or none is square to ``up``): no plane at all
         return None
     normals, triples = normals[keep] / length[keep, None], triples[keep]
     offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
-    counts = (np.abs(sample @ normals.T - offsets) < band).sum(axis=0)
-    best = int(np.argmax(counts))
-    if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
-        return None
-    inliers = sample[np.abs(sample @ normals[best] - offsets[best]) < band]
+    near = np.abs(sample @ normals.T - offsets) < band  # (sample, plane)
+    remaining = np.ones(len(sample), dtype=bool)
+    for _ in range(PLATFORM_CANDIDATES):  # the largest plane, then the largest of the points left, ...
+        counts = near[remaining].sum(axis=0)
+        best = int(np.argmax(counts))
+        if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
+            return None
+        platform = _platform_on(points, sample[near[:, best]], band, spacing, up, viewpoint)
+        if platform is not None:
+            return platform
+        remaining &= ~near[:, best]
+    return None
+
+
+def _platform_on(points, inliers, band: float, spacing: float, up, viewpoint) -> Platform | None:
+    """The platform on the plane fitted to ``inliers``, up where ``up``, the ``viewpoint`` or the
+    objects say (see find_platform); None when the plane carries no objects."""
     centre = inliers.mean(axis=0)
     normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]
-    if normal @ (-centre) < 0:  # make the normal point towards the scanner
-        normal = -normal
+    if up is not None:
+        side, source = float(np.sign(normal @ up)), "the given up direction"
+    elif viewpoint is not None:
+        side, source = float(np.sign(normal @ (np.asarray(viewpoint, float) - centre))), "the scanner's position"
+    else:
+        side, source = _up_side(points, inliers, centre, normal, band, spacing), "the objects standing on it"
+        if side == 0:
+            return None
+    normal = side * normal
     height = (points - centre) @ normal
-    return height < band
+    return Platform(centre, normal, height < band, band, source)
+
+
+def _up_side(points, inliers, centre, normal, band: float, spacing: float) -> float:
+    """+1 or -1: the side of the plane the objects stand on, or 0 when the plane carries none.
+
+    Off the plane, over the plane's own footprint (the convex hull of its points, less a margin, so
+    that the platform's side faces do not count), are the objects standing on it: seen from the
+    scanner's side, the plane hides whatever lies under it.  The plane is a platform only when those
+    points lie on one side (at least UP_SIDE_SHARE of them, and ALL_ON_ONE_SIDE of all the points off
+    it) and it holds up most of the objects (at least SUPPORTED_SHARE of the points off the plane lie
+    over its hull): the face of an object holds up nothing but itself, and other objects stand below it."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    axes = np.vstack([u, np.cross(normal, u)])
+    try:
+        hull = ConvexHull((inliers - centre) @ axes.T)
+    except QhullError:
+        return 0.0
+    height = (points - centre) @ normal
+    off = np.abs(height) > band
+    flat = (points[off] - centre) @ axes.T
+    reach = flat @ hull.equations[:, :2].T + hull.equations[:, 2]  # <= 0 inside each edge
+    over = reach.max(axis=1) <= 0
+    inside = reach.max(axis=1) <= -max(HULL_MARGIN_MM, HULL_MARGIN_SPACINGS * spacing)
+    above = int(np.count_nonzero(height[off][inside] > 0))
+    below = int(np.count_nonzero(inside)) - above
+    side = 1.0 if above > below else -1.0
+    if max(above, below) < MIN_CLUSTER_POINTS or over.mean() < SUPPORTED_SHARE:
+        return 0.0
+    if max(above, below) < UP_SIDE_SHARE * (above + below) or np.mean(side * height[off] > 0) < ALL_ON_ONE_SIDE:
+        return 0.0
+    return side
 
 
 def _clusters(points: np.ndarray, link: float) -> np.ndarray:

@@ -12,7 +12,7 @@ passes proves the method and not the generator:
 * the workpiece: the simulated car or figurine, or a real Stanford bunny range scan placed by its
   bun.conf pose (the mesh is rendered only to hide what the real scan's points hide);
 * the platform: fully seen, sparse (a dark table returns few points), partly seen (only near the
-  objects) or not there at all; and stray points (dust, multipath) spread over the scene.
+  objects) or not there at all; and stray points (dust, mixed pixels) on the rays in front of the surfaces.
 
 Every point keeps its role, the truth is exact (bunny: as good as bun.conf), and the scanner's
 position and the table's "up" are known in the export frame, for the tests of what a file can tell.
@@ -43,6 +43,8 @@ BUNNY_SCANS_FROM_ABOVE = ("bun000.ply", "bun045.ply", "bun090.ply", "bun180.ply"
 BUNNY_UP = np.array([0.0, 1.0, 0.0])
 # A real scan point is hidden when a rendered surface lies this far (mm) in front of it on its pixel.
 OCCLUDED_MM = 1.0
+# Stray points lie on real rays, at this range of fractions of the depth of the surface the ray meets.
+STRAY_DEPTH = (0.6, 0.995)
 # Touching objects are seen from this high above by default: a view into the gap between them.
 CONTACT_ELEVATION_DEG = 65.0
 # Image size of the simulated scanner: about 90k points over the scene, quick to calibrate.
@@ -126,9 +128,9 @@ def cell_scan(spec: CellSpec = CellSpec(), bunny_folder: Path | None = None) -> 
         keep = roles != "workpiece"
         points, roles = np.vstack([points[keep], real]), np.concatenate([roles[keep], np.full(len(real), "workpiece")])
     points, roles = _platform_seen(points, roles, spec, scan, rng)
-    if spec.stray_fraction > 0:
+    if spec.stray_fraction > 0:  # dust and mixed pixels: returns along real rays, short of the surface
         n = int(spec.stray_fraction * len(points))
-        stray = rng.uniform(points.min(axis=0), points.max(axis=0), (n, 3))
+        stray = points[rng.integers(len(points), size=n)] * rng.uniform(STRAY_DEPTH[0], STRAY_DEPTH[1], (n, 1))
         points, roles = np.vstack([points, stray]), np.concatenate([roles, np.full(n, "stray")])
     order = rng.permutation(len(points))  # a file lists points in its own order
     points, roles = points[order], roles[order]
