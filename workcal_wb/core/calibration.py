@@ -18,7 +18,7 @@ from . import frames
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .match import METHODS, MatchOptions, match
-from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted
+from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -206,14 +206,7 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
 
 
 def _refit(scan, idx, surface, found: MatchResult, options: dict, role: str) -> MatchResult:
-    """The match on the final region, started from the pose found while locating it; its candidates
-    and ambiguity come from the global search that found it."""
-    refit = match(_region_cloud(scan, idx, role), surface, init=found.matrix, **options)
-    if refit.status == OK and found.status == AMBIGUOUS:
-        refit.status, refit.reasons, refit.candidates = AMBIGUOUS, found.reasons, found.candidates
-    refit.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **refit.timings_s}
-    refit.time_s += found.time_s
-    return refit
+    return refit(_region_cloud(scan, idx, role), surface, found, options)
 
 
 def _inputs(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toolpath_points) -> dict:

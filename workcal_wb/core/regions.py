@@ -17,8 +17,8 @@ from scipy.spatial import cKDTree
 from . import frames, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
-from .match import match
-from .result import FAILED, MatchResult
+from .match import MatchOptions, match
+from .result import AMBIGUOUS, FAILED, OK, MatchResult
 from .surface import SurfaceModel
 
 # The platform must hold at least this fraction of the scan to count as one (a dark table returns few
@@ -54,6 +54,8 @@ MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
 SEARCH_ATTEMPTS = 3
 GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
+# A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
+MIN_FITNESS_OF_CLUSTER = 0.05
 
 
 @dataclass
@@ -105,31 +107,73 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
         platform_idx, objects = np.empty(0, dtype=np.int64), valid
     else:
         platform_idx, objects = valid[platform.below], valid[~platform.below]
-    labels = _clusters(points[objects], LINK_SPACINGS * spacing)
     report = progress or (lambda fraction, message: None)
-
-    report(0.1, f"looking for the reference {reference.name}")
-    options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3)
-    reference_match, rejected = _first_match(scan, points, objects, labels, reference, options, "reference")
-    if reference_match is None:
-        raise NotFound(f"reference object {reference.name}: not found in {scan.name}: "
-                       + _why_not_found(points, objects, labels, reference, rejected, tolerance_mm, "reference"))
-    on_reference = _on_model(points[objects], labels, reference, reference_match.matrix, max(2.0, 3 * spacing))
-    if on_reference.touching:
-        warnings.append(f"{scan.name}: the reference touches another object; its region is only the points "
-                        "near its model")
-    reference_idx = objects[on_reference.region]
-
-    report(0.3, f"looking for the workpiece {workpiece.name}")
-    rest, rest_labels = objects[~on_reference.region], labels[~on_reference.region]
-    workpiece_match, rejected = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
-    if workpiece_match is None:
-        raise NotFound(f"workpiece {workpiece.name}: not found in {scan.name}: "
-                       + _why_not_found(points, rest, rest_labels, workpiece, rejected, tolerance_mm, "workpiece"))
-    # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
-    on_workpiece = _on_model(points[rest], rest_labels, workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
-    workpiece_idx = rest[on_workpiece.clusters]
+    surfaces = {"reference": reference, "workpiece": workpiece}
+    near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
+    context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm,
+                   tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
+                                                           min_fitness=MIN_FITNESS_OF_CLUSTER))
+    try:
+        found = _in_turn(objects, ("reference", "workpiece"), report, **context)
+    except NotFound as exc:
+        found = exc
+    # A reference not found, or not for sure, where objects may touch: the workpiece first, then the
+    # reference in what is left of its cluster.
+    if isinstance(found, NotFound) or found["reference"][0].status != OK:
+        try:
+            other = _in_turn(objects, ("workpiece", "reference"), report, **context)
+        except NotFound:
+            other = None
+        if other is not None and (isinstance(found, NotFound) or _rank(other) > _rank(found)):
+            found = other
+    if isinstance(found, NotFound):
+        raise found
+    (workpiece_match, workpiece_idx, wp_touching), (reference_match, reference_idx, ref_touching) = (
+        found["workpiece"], found["reference"])
+    if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
+        reference_idx = reference_idx[_nearer(points[reference_idx], (reference, reference_match.matrix),
+                                              (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
+        workpiece_idx = workpiece_idx[_nearer(points[workpiece_idx], (workpiece, workpiece_match.matrix),
+                                              (reference, reference_match.matrix), near_mm["reference"])]
+        warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
+                        f"scan was split between the placed models; each region is only the points nearer its model")
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform)
+
+
+def _rank(found: dict) -> int:
+    return sum(match.status == OK for match, _, _ in found.values())
+
+
+def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, tolerance_mm, options) -> dict:
+    """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
+    ones before left: a cluster the model explains only in part is split (see _on_model)."""
+    found, left = {}, objects
+    for step, role in enumerate(order):
+        surface = surfaces[role]
+        report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
+        labels = _clusters(points[left], LINK_SPACINGS * spacing)
+        result, rejected = _first_match(scan, points, left, labels, surface, options, role, near_mm[role])
+        if result is None:
+            what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
+            raise NotFound(f"{what}: not found in {scan.name}: "
+                           + _why_not_found(points, left, labels, surface, rejected, tolerance_mm, role))
+        on = _on_model(points[left], labels, surface, result.matrix, near_mm[role])
+        # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
+        region = on.clusters if role == "workpiece" and not on.touching else on.region
+        found[role] = (result, left[region], on.touching)
+        left = left[~region]
+    return found
+
+
+def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict) -> MatchResult:
+    """The match on a final region, started from the pose found while locating it; its candidates
+    and ambiguity come from the global search that found it."""
+    again = match(cloud, surface, init=found.matrix, **options)
+    if again.status == OK and found.status == AMBIGUOUS:
+        again.status, again.reasons, again.candidates = AMBIGUOUS, found.reasons, found.candidates
+    again.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **again.timings_s}
+    again.time_s += found.time_s
+    return again
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str) -> MatchResult:
@@ -265,28 +309,39 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
 
 
 def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
-    """Clusters that could be the model by size, most alike first."""
+    """Clusters that could hold the model: those of its size, most alike first, then the larger ones
+    (objects that touch, or clay joining them, make one cluster), smallest first."""
     if len(idx) == 0:
         return []
-    out = []
+    alike, larger = [], []
     for label in np.unique(labels):
         members = idx[labels == label]
         if len(members) < MIN_CLUSTER_POINTS:
             continue
         ratio = Cloud(points[members]).diagonal() / surface.diagonal
         if SIZE_RATIO_RANGE[0] <= ratio <= SIZE_RATIO_RANGE[1]:
-            out.append((abs(np.log(ratio)), -len(members), members))
-    return [members for *_, members in sorted(out, key=lambda item: item[:2])]
+            alike.append((abs(np.log(ratio)), -len(members), members))
+        elif ratio > SIZE_RATIO_RANGE[1]:
+            larger.append((ratio, -len(members), members))
+    return [members for *_, members in sorted(alike, key=lambda item: item[:2]) + sorted(larger, key=lambda i: i[:2])]
 
 
-def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str):
+def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float):
     """Match the model against its candidate clusters in turn; the first trustworthy match wins.
 
-    Returns (the match or None, the best match rejected for its share of points within the tolerance
-    or None): a rejected match that explains its cluster says the tolerance is below the noise."""
+    A cluster the placed model explains only in part (it holds more: objects touching) is split: the
+    match is judged again on the points near the placed model alone.  Returns (the match or None, the
+    best match rejected for its share of points within the tolerance or None): a rejected match that
+    explains its cluster says the tolerance is below the noise."""
     fallback, rejected = None, None
     for members in _candidates(points, idx, labels, surface):
         result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
+        if result.matrix is not None and result.fitness < MIN_FITNESS[role]:
+            near = _near(points[members], surface, result.matrix, near_mm)
+            if near.sum() < MIN_CLUSTER_POINTS:
+                continue
+            result = refit(Cloud(points[members[near]], name=f"{role} part of a candidate in {scan.name}"), surface,
+                           result, {**options, "min_fitness": MatchOptions.min_fitness})
         noisy = result.noise_mm > result.tolerance_mm  # failed only because the tolerance is below the noise
         if (result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]
                 or noisy):
@@ -330,13 +385,24 @@ class _OnModel:
 
 
 def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> _OnModel:
-    """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful)."""
+    """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful);
+    where its cluster holds more than the model explains (objects touching), only the points near it."""
     near = _near(points, surface, U, distance)
     counts = np.bincount(labels, minlength=labels.max() + 1)
-    share = np.bincount(labels, weights=near, minlength=len(counts)) / np.maximum(counts, 1)
+    on = np.bincount(labels, weights=near, minlength=len(counts))
+    share = on / np.maximum(counts, 1)
     clusters = share[labels] >= CLUSTER_SHARE
-    touching = clusters.any() and near[clusters].mean() < TOUCHING_SHARE
-    return _OnModel(clusters, clusters & near if touching else clusters, bool(touching))
+    held = on[labels] >= MIN_CLUSTER_POINTS  # clusters the model explains a real part of
+    touching = bool((held & (share[labels] < TOUCHING_SHARE)).any())
+    return _OnModel(clusters, held & near if touching else clusters, touching)
+
+
+def _nearer(points: np.ndarray, own, other, distance: float) -> np.ndarray:
+    """Which points lie nearer to the ``own`` placed model than to the ``other`` ((SurfaceModel, U) each);
+    points beyond ``distance`` of the other count as nearer to their own."""
+    d_own = own[0].nearest(frames.apply(frames.invert(own[1]), points), np.inf)[0]
+    d_other = other[0].nearest(frames.apply(frames.invert(other[1]), points), distance)[0]
+    return d_own < d_other
 
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
