@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import frames
+from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .match import METHODS, MatchOptions, match
-from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted, refit
+from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -87,6 +87,8 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
     match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed)
+    if scanner_origin(scan, options) is not None:  # the matches judge their views from where the scanner stood
+        match_options["viewpoint"] = tuple(scanner_origin(scan, options))
     warnings = list(scan.warnings)
 
     if regions is None:
@@ -115,6 +117,12 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         U_match = match_trusted(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface,
                                 match_options, "workpiece")
 
+    report(0.7, "weighing the poses by contact with the platform and free space")
+    scene = _physics_scene(scan, options, found.plane if regions is None else None)
+    U_match, V_match = (physics.decide(m, surface, scene, role, refit=lambda U, idx=region_idx[role], s=surface, r=role:
+                                       match(_region_cloud(scan, idx, r), s, init=U, **match_options))
+                        for m, surface, role in ((U_match, workpiece_surface, "workpiece"),
+                                                 (V_match, reference_surface, "reference")))
     result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
                   inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
                   regions={**{k: np.asarray(v, dtype=np.int64) for k, v in region_idx.items()}, "source": source},
@@ -136,6 +144,21 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     report(1.0, f"calibration {status}")
     return CalibrationResult(status, W=W, U=U, V=V, uncertainty=uncertainty, quality_gates=gates, reasons=reasons,
                              time_s=time.perf_counter() - started, **result)
+
+
+def _physics_scene(scan: Cloud, options: CalibrationOptions, platform) -> physics.Scene:
+    """The whole scan as the physical constraints see it: its points, the platform (found with the
+    regions, or now for regions the user gave) and the scanner positions the user or the file gives."""
+    valid = np.isfinite(scan.points).all(axis=1)
+    points = scan.points[valid]
+    spacing = pointops.median_spacing(points, seed=options.seed)
+    if platform is None:
+        platform = find_platform(points, spacing, np.random.default_rng(options.seed), options.up,
+                                 scanner_origin(scan, options))
+    if options.scanner_origin is not None:
+        return physics.Scene(points, spacing, platform, np.asarray([options.scanner_origin]))
+    sensor_of = scan.sensor_indices()
+    return physics.Scene(points, spacing, platform, scan.sensors, None if sensor_of is None else sensor_of[valid])
 
 
 def scanner_origin(scan: Cloud, options: CalibrationOptions):

@@ -112,7 +112,8 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
-                                                           min_fitness=MIN_FITNESS_OF_CLUSTER))
+                                                           min_fitness=MIN_FITNESS_OF_CLUSTER,
+                                                           viewpoint=None if viewpoint is None else tuple(viewpoint)))
     try:
         found = _in_turn(objects, ("reference", "workpiece"), report, **context)
     except NotFound as exc:
@@ -170,7 +171,7 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
     and ambiguity come from the global search that found it."""
     again = match(cloud, surface, init=found.matrix, **options)
     if again.status == OK and found.status == AMBIGUOUS:
-        again.status, again.reasons, again.candidates = AMBIGUOUS, found.reasons, found.candidates
+        again.status, again.reasons, again.candidates, again.ties = AMBIGUOUS, found.reasons, found.candidates, found.ties
     again.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **again.timings_s}
     again.time_s += found.time_s
     return again
