@@ -54,6 +54,9 @@ MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
 SEARCH_ATTEMPTS = 3
 GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
+# Where the reference touches something, its region keeps only points this close to its surface: this
+# many times the scan's noise, and at least MIN_ON_SURFACE_MM.
+ON_SURFACE_NOISES, MIN_ON_SURFACE_MM = 5.0, 0.5
 # A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
 MIN_FITNESS_OF_CLUSTER = 0.05
 
@@ -134,6 +137,9 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
         reference_idx = reference_idx[_nearer(points[reference_idx], (reference, reference_match.matrix),
                                               (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
+        # The reference is rigid and unchanged: clay pressed against it lies off its surface.
+        within = max(MIN_ON_SURFACE_MM, ON_SURFACE_NOISES * reference_match.noise_mm)
+        reference_idx = reference_idx[_on_surface(points[reference_idx], reference, reference_match.matrix, within)]
         workpiece_idx = workpiece_idx[_nearer(points[workpiece_idx], (workpiece, workpiece_match.matrix),
                                               (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
@@ -404,6 +410,13 @@ def _nearer(points: np.ndarray, own, other, distance: float) -> np.ndarray:
     d_own = own[0].nearest(frames.apply(frames.invert(own[1]), points), np.inf)[0]
     d_other = other[0].nearest(frames.apply(frames.invert(other[1]), points), distance)[0]
     return d_own < d_other
+
+
+def _on_surface(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, within: float) -> np.ndarray:
+    """Which points lie within ``within`` mm of the placed model's surface (point to plane)."""
+    moved = frames.apply(frames.invert(U), points)
+    _, idx, found = surface.nearest(moved, 2 * within + 2 * surface.spacing)
+    return found & (np.abs(surface.plane_residuals(moved, idx)) <= within)
 
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:

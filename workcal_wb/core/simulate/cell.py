@@ -100,6 +100,11 @@ class CellScan:
     def mask(self, role: str) -> np.ndarray:
         return self.roles == role
 
+    def platform_height_over_origin(self) -> float:
+        """How far the platform's top lies above the export frame's origin, along up (mm)."""
+        top = frames.apply(self.V, np.array([PLATFORM_POSE[:3, 3]]))[0]
+        return float(top @ self.up)
+
     def moved(self, T: np.ndarray) -> "CellScan":
         """The same scan exported in another frame: every point, and the truth, moved by T."""
         cloud = self.cloud.transformed(T)
