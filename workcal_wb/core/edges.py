@@ -30,9 +30,11 @@ CHECK_RATIO = 2 * WEAK_RATIO
 OFF_SIGMAS, OFF_FLOOR_TOLERANCES = 3.0, 0.1
 # ... and the slide has reached an edge when more points than the fewest are off, by more than
 # EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own jitter (points at the threshold cross it
-# back and forth as the pose moves: ~ the square root of the count).
+# back and forth as the pose moves: ~ the square root of the count of those that cross it at all;
+# points off all along the slide, a noisier face's tail or stray points, do not jitter).
 EXTRA_OFF_POINTS, COUNT_SIGMAS = 5, 3.0
-# The slide is followed this many tolerances each way; an edge farther out does not pin it.
+# The slide is followed this many tolerances each way past the off threshold (a point at an edge is
+# only off once it has gone the threshold past it); an edge farther out does not pin it.
 REACH_TOLERANCES = 2.0
 # Profile samples across the reach each way, then halvings of the step at each end.
 PROFILE_STEPS, BISECTIONS = 12, 5
@@ -53,8 +55,8 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
     """Move ``T`` (scan -> model) to the middle of the edge interval along each weak motion and
     return it with the stability of the fit (see stability.stability) extended by
     ``held_by_edges``: for each such motion its description, eigenvalue and half-width
-    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way are listed as
-    free when their eigenvalue is below FREE_MOTION_RATIO."""
+    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way (past the off
+    threshold) are listed as free when their eigenvalue is below FREE_MOTION_RATIO."""
     points = points[surface.nearest_cell(frames.apply(T, points), gate + surface.spacing)[2]]  # clutter is no edge
     moved = frames.apply(T, points)
     closest, normals = surface.closest_points(moved)
@@ -65,7 +67,7 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
                    "constrained": False, "held_by_edges": []}
     vals, vecs, centre, radius = gelfand(moved[on], normals[on])
     threshold = max(OFF_SIGMAS * sigma, OFF_FLOOR_TOLERANCES * tolerance_mm)
-    reach = REACH_TOLERANCES * tolerance_mm
+    reach = threshold + REACH_TOLERANCES * tolerance_mm
     free, held = [], []
     for i in np.flatnonzero(vals < WEAK_RATIO):
         twist = _unit_twist(vecs[:, i], centre, radius, moved[on])
@@ -112,13 +114,12 @@ def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, thre
         return None
     points = moved[changing]
     amounts = np.linspace(-reach, reach, 2 * PROFILE_STEPS + 1)
-    counts = np.array([off(points, a).sum() for a in amounts]) + (at_rest & ~changing).sum()
+    counts = np.array([off(points, a).sum() for a in amounts])
     limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min()))
     low = np.flatnonzero(counts <= limit)
     first, last = low[0], low[-1]
     if first == 0 or last == len(amounts) - 1:
         return None  # still in the valley at the end of reach
-    limit -= (at_rest & ~changing).sum()
 
     def crossing(inside, outside):
         for _ in range(BISECTIONS):
