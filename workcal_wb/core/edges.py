@@ -28,10 +28,10 @@ CHECK_RATIO = 2 * WEAK_RATIO
 # A point is off the model when farther than this many residual sigmas, and never closer than this
 # fraction of the tolerance (a noise-free scan would otherwise count every tilt of a face) ...
 OFF_SIGMAS, OFF_FLOOR_TOLERANCES = 3.0, 0.1
-# ... and the slide has reached an edge when more points than the fewest are off, by more than
-# EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own jitter (points at the threshold cross it
-# back and forth as the pose moves: ~ the square root of the count of those that cross it at all;
-# points off all along the slide, a noisier face's tail or stray points, do not jitter).
+# ... and the slide has reached an edge when more of the points that cross an edge within reach
+# are off than at the fewest, by more than EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own
+# jitter (points at the threshold cross it back and forth as the pose moves: ~ the square root of
+# the count).  Points that cross no edge (a noisier face's tail, stray points) are not counted.
 EXTRA_OFF_POINTS, COUNT_SIGMAS = 5, 3.0
 # The slide is followed this many tolerances each way past the off threshold (a point at an edge is
 # only off once it has gone the threshold past it); an edge farther out does not pin it.
@@ -104,12 +104,18 @@ def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, thre
     """(lo, hi) amounts of ``twist`` between which the count of points off the surface stays
     within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when the slide
     meets no edge within ``reach`` on a side."""
-    def off(points, amount):
-        return surface.exact_distance(frames.apply(slide(twist, centre, amount), points)) > threshold
+    def distance(points, amount):
+        return surface.exact_distance(frames.apply(slide(twist, centre, amount), points))
 
-    # Only points that change side somewhere within reach can change the count.
-    at_rest = off(moved, 0.0)
-    changing = (off(moved, -reach) != at_rest) | (off(moved, reach) != at_rest)
+    def off(points, amount):
+        return distance(points, amount) > threshold
+
+    # Only points whose distance changes by more than the threshold within reach can change the
+    # count: those crossing an edge.  Points hovering at the threshold (a noisy face's tail, a
+    # faceted round surface turned about its axis) would jitter the count without an edge.
+    at_rest = distance(moved, 0.0)
+    changing = ((np.abs(distance(moved, -reach) - at_rest) > threshold)
+                | (np.abs(distance(moved, reach) - at_rest) > threshold))
     if changing.sum() <= EXTRA_OFF_POINTS:
         return None
     points = moved[changing]
