@@ -528,8 +528,8 @@ class Judge:
             return normals, found, np.where(found, np.abs(self.surface.plane_residuals(moved, idx)), self.gate)
         r = np.full(len(moved), self.gate)
         if found.any():
-            closest, normals[found] = self.surface.closest_points(moved[found])
-            r[found] = np.linalg.norm(moved[found] - closest, axis=1)
+            closest, faces = self.surface.closest_points(moved[found])
+            normals[found], r[found] = faces, np.linalg.norm(moved[found] - closest, axis=1)
         return normals, found, r
 
     def _choose_view(self, poses, lookups) -> None:
