@@ -121,7 +121,10 @@ def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, thre
     points = moved[changing]
     amounts = np.linspace(-reach, reach, 2 * PROFILE_STEPS + 1)
     counts = np.array([off(points, a).sum() for a in amounts])
-    limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min()))
+    # Points left farther off than the whole reach are unexplained by the fit: where they lie beside
+    # the part, its edge may be misplaced, so they widen the allowance as much as points that cross.
+    far = np.count_nonzero(~changing & (at_rest > reach))
+    limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min() + far))
     low = np.flatnonzero(counts <= limit)
     first, last = low[0], low[-1]
     if first == 0 or last == len(amounts) - 1:
