@@ -493,11 +493,11 @@ class Judge:
         looks = []
         weights = []
         for T in (best, rival):
-            normals, found, r = self._lookup(T)
+            idx, found, r = self._lookup(T)
             matched = found & (r < self.gate)
             if matched.sum() < MIN_SCAN_POINTS:
                 return False
-            looks.append(visibility.viewing_direction(normals[matched] @ T[:3, :3]))
+            looks.append(visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3]))
             weights.append(np.clip(1 - (r / self.gate) ** 2, 0, 1))
         return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
                     < self.options.rival_significance)
@@ -516,32 +516,22 @@ class Judge:
         return kept
 
     def _lookup(self, T: np.ndarray):
-        """(model normal at each sample point under T (model frame), found, its distance from the
-        model): the plane of the nearest model sample, or on a mesh the exact closest point and its
-        face (near an edge or a thin wall the nearest sample may lie on another face: a point right
-        on the surface would count as off it, or as facing away)."""
+        """(nearest model sample, found, |point-to-plane residual|) of each sample point under T."""
         moved = frames.apply(T, self.sample)
         # The nearest sample may lie a spacing away along the surface from a point right on it.
         _, idx, found = self.surface.nearest_cell(moved, self.gate + self.surface.spacing)
-        normals = self.surface.normals[idx]
-        if not self.surface.is_mesh:
-            return normals, found, np.where(found, np.abs(self.surface.plane_residuals(moved, idx)), self.gate)
-        r = np.full(len(moved), self.gate)
-        if found.any():
-            closest, faces = self.surface.closest_points(moved[found])
-            normals[found], r[found] = faces, np.linalg.norm(moved[found] - closest, axis=1)
-        return normals, found, r
+        return idx, found, np.where(found, np.abs(self.surface.plane_residuals(moved, idx)), self.gate)
 
     def _choose_view(self, poses, lookups) -> None:
         """The viewpoint (given, or implied by the pose with the most scan points on the model) and
         the scan seen from it; none when the matched normals face every way."""
         top = int(np.argmax([np.sum(found & (r < self.gate)) for _, found, r in lookups]))
-        normals, found, r = lookups[top]
+        idx, found, r = lookups[top]
         matched = found & (r < self.gate)
         points = self.sample[matched]
         if len(points) < MIN_SCAN_POINTS:
             return
-        normals = normals[matched] @ poses[top].T[:3, :3]  # model normals in the scan's frame
+        normals = self.surface.normals[idx[matched]] @ poses[top].T[:3, :3]  # model normals in the scan's frame
         given = self.options.viewpoint
         if given is not None:
             away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
@@ -581,11 +571,11 @@ class Judge:
 
     def evidence(self, T: np.ndarray, lookup=None) -> visibility.Evidence:
         """The view evidence of pose T (scan -> model); without a view, each scan point's weight."""
-        normals, found, r = self._lookup(T) if lookup is None else lookup
+        idx, found, r = self._lookup(T) if lookup is None else lookup
         weights = np.clip(1 - (r / self.gate) ** 2, 0, 1)
         if self.view is None:
             return visibility.Evidence(weights, 0, 0, int((weights > 0).sum()))
-        weights[visibility.facing(self.sample, normals @ T[:3, :3], self.viewpoint)
+        weights[visibility.facing(self.sample, self.surface.normals[idx] @ T[:3, :3], self.viewpoint)
                 <= visibility.FACING_COS] = 0.0
         samples = self.view_samples
         return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
