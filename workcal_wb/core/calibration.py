@@ -31,6 +31,9 @@ class CalibrationOptions:
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
     seed: int = 0
+    # OpenBLAS threads while matching (pointops.blas_threads): one is fastest; None leaves the process's
+    # setting alone (FreeCAD's worker threads: the GUI thread goes on using numpy meanwhile).
+    blas_threads: int | None = 1
 
     def __post_init__(self):
         if not (isinstance(self.tolerance_mm, (int, float)) and math.isfinite(self.tolerance_mm)
@@ -73,13 +76,14 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     workpiece_surface, reference_surface = surfaces
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
-    match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed)
+    match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed,
+                         blas_threads=options.blas_threads)
     warnings = list(scan.warnings)
 
     if regions is None:
         try:
             found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
-                           progress=lambda f, m: report(0.6 * f, m))
+                           progress=lambda f, m: report(0.6 * f, m), blas_threads=options.blas_threads)
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
             return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
                                      tolerance_mm=options.tolerance_mm, seed=options.seed,

@@ -64,16 +64,18 @@ class Located:
                 "source": "auto", "warnings": list(self.warnings)}
 
 
-def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0) -> dict:
+def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0,
+                 blas_threads: int | None = 1) -> dict:
     """The workpiece, reference and platform regions of ``scan`` as index arrays (see ``locate``)."""
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, seed) for m in (workpiece, reference)]
-    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed).as_dict()
+    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed, blas_threads=blas_threads).as_dict()
 
 
 def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
-           seed: int = 0, progress=None) -> Located:
+           seed: int = 0, progress=None, blas_threads: int | None = 1) -> Located:
     """Find the reference and the workpiece in a scene scan; NotFound names what could not be found
-    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise)."""
+    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise).
+    ``blas_threads``: as in MatchOptions."""
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
@@ -96,7 +98,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     report = progress or (lambda fraction, message: None)
 
     report(0.1, f"looking for the reference {reference.name}")
-    options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3)
+    options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3, blas_threads=blas_threads)
     reference_match, rejected = _first_match(scan, points, objects, labels, reference, options, "reference")
     if reference_match is None:
         raise NotFound(f"reference object {reference.name}: not found in {scan.name}: "
