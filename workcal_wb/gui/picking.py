@@ -8,11 +8,14 @@ How it works (FreeCAD 0.20's Python API has no access to the C++ rubber-band sel
   Lasso: click the corners (or drag freehand); right-click, Enter or a click on the first corner
   closes it; Esc drops it.  Shift adds to the region, Ctrl subtracts from it.
 * ``polygon_mask`` projects every scan point with the camera's view volume (vectorised, same result as
-  FreeCAD's ``getPointOnScreen``) and tests it against the polygon (``matplotlib.path``).  Selection goes
-  through the whole depth, like FreeCAD's own point-cloud cut.  All positions are Coin pixels
-  (origin bottom-left), as in the events and ``view.getSize()``.
+  FreeCAD's ``getPointOnScreen``) and tests it against the polygon (``matplotlib.path``).  With
+  "Visible points only" (the default) ``visible_mask`` keeps only the points no other scan point hides
+  (a depth buffer of the points themselves), so a box over the part does not take the platform
+  under it; without it the selection goes through the whole depth, like FreeCAD's point-cloud cut.
+  All positions are Coin pixels (origin bottom-left), as in the events and ``view.getSize()``.
 * ``PickPanel`` is the task panel: region (workpiece/reference), tool, mode, counts, undo of the last
-  pick.  The whole session is one undo step: OK commits it, Cancel restores the regions.
+  pick.  The whole session is one undo step: OK records the final regions as one command
+  (``fc.regions.set_regions``, replayable in a macro), Cancel restores them.
 """
 from __future__ import annotations
 
@@ -24,9 +27,10 @@ import FreeCADGui
 import workcal_wb
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError, WorkCalError
+from workcal_wb.fc import prefs
 from workcal_wb.fc import scan as fc_scan
 from workcal_wb.fc.placements import container_matrix
-from workcal_wb.gui import region_display
+from workcal_wb.gui import region_display, replay
 from workcal_wb.gui.task_panels import OK_CANCEL, QtCore, QtGui, QtWidgets
 
 translate = FreeCAD.Qt.translate
@@ -61,6 +65,59 @@ def project(view, points: np.ndarray):
     xy[:, 0] = (H[:, 0] / safe + 1.0) * 0.5 * width
     xy[:, 1] = (H[:, 1] / safe + 1.0) * 0.5 * height
     return xy, valid
+
+
+def eye_depth(view, points: np.ndarray) -> np.ndarray:
+    """Distance (mm) of each point in front of the camera, along its viewing direction."""
+    from pivy import coin
+
+    camera = view.getCameraNode()
+    direction = np.array(camera.orientation.getValue().multVec(coin.SbVec3f(0, 0, -1)).getValue())
+    position = np.array(camera.position.getValue().getValue())
+    return (np.asarray(points, dtype=np.float64) - position) @ direction
+
+
+# A point is hidden when a point nearer the camera projects within this many cells of it; cells are
+# this many times the points' spacing on the screen (so a surface of points is closed), and a
+# point deeper than the nearest by more than DEPTH_CELLS cell widths (in mm) is behind it.
+CELL_SPACINGS, NEIGHBOUR_CELLS, DEPTH_CELLS, MIN_CELL_PX = 2.0, 1, 3.0, 2.0
+
+
+def visible_mask(view, points: np.ndarray) -> np.ndarray:
+    """Which points no other point hides, as the camera sees them: the points themselves rendered into a
+    coarse depth buffer (cells a couple of point spacings wide on the screen)."""
+    from scipy.ndimage import minimum_filter
+    from scipy.spatial import cKDTree
+
+    xy, valid = project(view, points)
+    depth = eye_depth(view, points)
+    idx = np.flatnonzero(valid)
+    if len(idx) < 2:
+        return valid
+    sample = idx[np.random.default_rng(0).choice(len(idx), min(len(idx), 4000), replace=False)]
+    spacing_px = float(np.median(cKDTree(xy[sample]).query(xy[sample], k=2)[0][:, 1]))
+    cell = max(MIN_CELL_PX, CELL_SPACINGS * spacing_px)
+    width, height = view.getSize()
+    cells = np.floor(xy[idx] / cell).astype(np.int64)
+    inside = (cells[:, 0] >= 0) & (cells[:, 1] >= 0) & (cells[:, 0] * cell < width) & (cells[:, 1] * cell < height)
+    grid = np.full((int(width // cell) + 2, int(height // cell) + 2), np.inf)
+    np.minimum.at(grid, (cells[inside, 0], cells[inside, 1]), depth[idx][inside])
+    nearest = minimum_filter(grid, size=2 * NEIGHBOUR_CELLS + 1, mode="constant", cval=np.inf)
+    mm_per_px = _mm_per_pixel(view, depth[idx])
+    visible = valid.copy()
+    keep = np.zeros(len(idx), dtype=bool)
+    keep[inside] = depth[idx][inside] <= nearest[cells[inside, 0], cells[inside, 1]] + DEPTH_CELLS * cell * mm_per_px
+    visible[idx[~keep & inside]] = False
+    return visible
+
+
+def _mm_per_pixel(view, depth: np.ndarray) -> float:
+    """How many mm one screen pixel spans at the points' median depth (orthographic or perspective camera)."""
+    camera = view.getCameraNode()
+    height_px = float(view.getSize()[1])
+    if hasattr(camera, "heightAngle"):
+        return 2.0 * float(np.median(depth)) * float(np.tan(camera.heightAngle.getValue() / 2)) / height_px
+    return float(camera.height.getValue()) / height_px
 
 
 def polygon_mask(view, points: np.ndarray, polygon) -> np.ndarray:
@@ -347,12 +404,14 @@ def _distance(a, b) -> float:
 # --- the task panel ------------------------------------------------------------------------------
 
 class PickPanel:
-    """Task panel for picking the workpiece and reference regions of one scan."""
+    """Task panel for picking the workpiece and reference regions of one scan.  ``on_close()`` runs once
+    the panel has closed, whichever way (the guide opens again there)."""
 
-    def __init__(self, obj, view, shape: str = BOX, role: str = "workpiece"):
+    def __init__(self, obj, view, shape: str = BOX, role: str = "workpiece", on_close=None):
         self.obj, self.doc, self.view = obj, obj.Document, view
         self.points = world_points(obj)  # raises InputError for an empty or unusable scan
-        fc_scan.get_regions(obj)  # stale regions: refuse before anything changes
+        self.initial = fc_scan.get_regions(obj)  # stale regions: refuse before anything changes
+        self.on_close = on_close or (lambda: None)
         self.history = []
         self.picks = 0
         self.last_polygon = None  # the last box/lasso applied, Coin pixels
@@ -383,23 +442,39 @@ class PickPanel:
         layout.addWidget(self.scan_label)
 
         self.role_buttons = self._group(layout, translate("WorkCal", "Region"), [
-            ("workpiece", translate("WorkCal", "Workpiece (X-A)")),
-            ("reference", translate("WorkCal", "Reference object (B-P)"))])
+            ("workpiece", translate("WorkCal", "Workpiece"), translate("WorkCal", "The points on the workpiece "
+                                                                                  "(matched to its model X-A)")),
+            ("reference", translate("WorkCal", "Reference object"), translate(
+                "WorkCal", "The points on the fixed reference object (matched to its model B-P)"))])
         self.shape_buttons = self._group(layout, translate("WorkCal", "Tool"), [
-            (BOX, translate("WorkCal", "Box")), (LASSO, translate("WorkCal", "Lasso"))])
+            (BOX, translate("WorkCal", "Box"), translate("WorkCal", "Drag a rectangle")),
+            (LASSO, translate("WorkCal", "Lasso"), translate("WorkCal", "Click the corners of a polygon"))],
+            horizontal=True)
         self.mode_buttons = self._group(layout, translate("WorkCal", "Mode"), [
-            (REPLACE, translate("WorkCal", "Replace")), (ADD, translate("WorkCal", "Add (Shift)")),
-            (SUBTRACT, translate("WorkCal", "Subtract (Ctrl)"))])
+            (REPLACE, translate("WorkCal", "Replace"), translate("WorkCal", "The region becomes what you pick")),
+            (ADD, translate("WorkCal", "Add (Shift)"), translate("WorkCal", "Add what you pick to the region")),
+            (SUBTRACT, translate("WorkCal", "Subtract (Ctrl)"), translate("WorkCal", "Take what you pick out of "
+                                                                                     "the region"))])
         for value, button in self.shape_buttons.items():
             button.toggled.connect(lambda checked, v=value: checked and self.tool.set_shape(v))
+        self.visible_box = QtWidgets.QCheckBox(translate("WorkCal", "Visible points only"))
+        self.visible_box.setObjectName("WorkCal_visible_only")
+        self.visible_box.setToolTip(translate("WorkCal", "Take only the points you see, not those hidden behind "
+                                                         "them (e.g. the platform under the part)"))
+        self.visible_box.setChecked(bool(prefs.get("PickVisibleOnly")))
+        self.visible_box.toggled.connect(lambda on: prefs.set("PickVisibleOnly", int(bool(on))))
+        layout.addWidget(self.visible_box)
 
         self.count_label = QtWidgets.QLabel()
         self.count_label.setObjectName("WorkCalRegionCounts")
+        self.count_label.setWordWrap(True)
         layout.addWidget(self.count_label)
         row = QtWidgets.QHBoxLayout()
-        self.undo_button = QtWidgets.QPushButton(translate("WorkCal", "Undo last pick"))
+        self.undo_button = QtWidgets.QPushButton(translate("WorkCal", "Undo pick"))
+        self.undo_button.setToolTip(translate("WorkCal", "Undo the last pick"))
         self.undo_button.clicked.connect(self.undo_pick)
-        self.clear_button = QtWidgets.QPushButton(translate("WorkCal", "Clear this region"))
+        self.clear_button = QtWidgets.QPushButton(translate("WorkCal", "Clear region"))
+        self.clear_button.setToolTip(translate("WorkCal", "Empty the region chosen above"))
         self.clear_button.clicked.connect(self.clear_role)
         row.addWidget(self.undo_button)
         row.addWidget(self.clear_button)
@@ -414,13 +489,14 @@ class PickPanel:
         return form
 
     @staticmethod
-    def _group(layout, title, options):
+    def _group(layout, title, options, horizontal: bool = False):
         box = QtWidgets.QGroupBox(title)
-        inner = QtWidgets.QHBoxLayout(box)
+        inner = QtWidgets.QHBoxLayout(box) if horizontal else QtWidgets.QVBoxLayout(box)
         buttons = {}
-        for value, text in options:
+        for value, text, tip in options:
             button = QtWidgets.QRadioButton(text)
             button.setObjectName(f"WorkCal_{value}")
+            button.setToolTip(tip)
             inner.addWidget(button)
             buttons[value] = button
         layout.addWidget(box)
@@ -450,7 +526,7 @@ class PickPanel:
         count = {r: 0 if regions[r] is None else len(regions[r]) for r in ROLES}
         self.scan_label.setText(translate("WorkCal", "Scan: {} ({} points)").format(
             self.obj.Label, len(self.points)))
-        self.count_label.setText(translate("WorkCal", "Workpiece: {} points    Reference: {} points").format(
+        self.count_label.setText(translate("WorkCal", "Workpiece: {} points\nReference: {} points").format(
             count["workpiece"], count["reference"]))
         self.undo_button.setEnabled(bool(self.history))
 
@@ -458,7 +534,10 @@ class PickPanel:
     def apply_polygon(self, polygon, modifier=None) -> np.ndarray:
         """Apply a finished box/lasso (Coin pixels); returns the indices inside it."""
         self.last_polygon = [tuple(p) for p in polygon]
-        picked = np.flatnonzero(polygon_mask(self.view, self.points, polygon))
+        mask = polygon_mask(self.view, self.points, polygon)
+        if self.visible_box.isChecked():
+            mask &= visible_mask(self.view, self.points)
+        picked = np.flatnonzero(mask)
         self.apply_selection(picked, modifier or self.mode())
         return picked
 
@@ -494,44 +573,52 @@ class PickPanel:
             return False
         return True
 
-    def _closed_outside(self) -> None:
-        """The dialog went away without OK or Cancel (e.g. closed by other code): treat it as Cancel."""
+    def _restore(self) -> None:
+        """The regions as they were before the panel opened (the live picks are only shown)."""
         if self.transaction:
             self.doc.abortTransaction()
             self.transaction = False
+        elif self.history:  # no undo available: put the regions back by hand
+            first = self.initial
+            fc_scan.set_regions(self.obj, first["workpiece"], first["reference"], source=first["source"] or "user")
+
+    def _closed_outside(self) -> None:
+        """The dialog went away without OK or Cancel (e.g. closed by other code): treat it as Cancel."""
         try:
+            self._restore()
             region_display.update(self.obj)
         except (RuntimeError, ReferenceError):  # the document is gone too
             pass
+        self.on_close()
 
     # task dialog protocol
     def getStandardButtons(self):
         return OK_CANCEL
 
     def accept(self):
+        """Record the final regions as one command (one undo step, replayable in a macro)."""
+        from workcal_wb.fc.regions import ranges
+
         self.tool.stop()
-        if self.transaction:
-            if self.picks:
-                self.doc.commitTransaction()
-            else:
-                self.doc.abortTransaction()
-        self.transaction = False
+        final = fc_scan.get_regions(self.obj)
+        self._restore()
         if self.picks:
-            regions = fc_scan.get_regions(self.obj)
+            runs = {role: replay.Code("workcal_wb.fc.regions.indices({!r})".format(
+                ranges(() if final[role] is None else final[role]))) for role in ROLES}
+            replay.run("workcal_wb.fc.regions.set_regions", self.obj, workpiece=runs["workpiece"],
+                       reference=runs["reference"])
             FreeCAD.Console.PrintMessage(translate("WorkCal", "WorkCal: regions of {}: workpiece {} points, "
                                                               "reference {} points\n").format(
-                self.obj.Label, *(0 if regions[r] is None else len(regions[r]) for r in ROLES)))
+                self.obj.Label, *(0 if final[r] is None else len(final[r]) for r in ROLES)))
+        region_display.update(self.obj)
         FreeCADGui.Control.closeDialog()
+        self.on_close()
         return True
 
     def reject(self):
         self.tool.stop()
-        if self.transaction:
-            self.doc.abortTransaction()
-        elif self.history:  # no undo available: put the regions back by hand
-            first = self.history[0]
-            fc_scan.set_regions(self.obj, first["workpiece"], first["reference"], source=first["source"] or "user")
-        self.transaction = False
+        self._restore()
         region_display.update(self.obj)
         FreeCADGui.Control.closeDialog()
+        self.on_close()
         return True

@@ -126,7 +126,7 @@ def selected_objects() -> list:
     return list(FreeCADGui.Selection.getSelection())
 
 
-def calibration_for(doc, required_ok: bool = False):
+def calibration_for(doc):
     """The calibration the user means: the selected one, or the only/most recent one in the document."""
     from workcal_wb.fc.calibration_object import find_calibrations, is_calibration
 
@@ -159,15 +159,14 @@ def confirm_force(reason: str) -> bool:
 
 
 def with_force(action, confirm=None):
-    """Run ``action(force=False)``; when the calibration is refused, ask ``confirm(reason)`` (default:
-    a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result or None."""
-    from workcal_wb.core.toolpath import ExportRefused
+    """Run ``action(force=False)``; when the calibration is refused for its status, ask ``confirm(reason)``
+    (default: a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result
+    or None.  Other refusals (envelope, tilt, non-finite numbers) propagate: forcing does not help there."""
+    from workcal_wb.core.toolpath import CalibrationNotOk
 
     try:
         return action(force=False)
-    except ExportRefused as exc:
-        if "status is" not in str(exc):  # envelope or non-finite numbers: forcing does not help
-            raise
+    except CalibrationNotOk as exc:
         if not (confirm or confirm_force)(str(exc)):
             warning(str(exc))
             return None
