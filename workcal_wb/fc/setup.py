@@ -72,8 +72,19 @@ def get_setup(doc) -> dict:
 
 def set_setup(doc, scan=UNCHANGED, workpiece=UNCHANGED, reference=UNCHANGED):
     """Store the chosen objects (None clears a role; an omitted role stays).  Checks each object
-    first (cheaply: no tessellation) and changes nothing when one is refused (InputError).
+    first (``check_setup``) and changes nothing when one is refused (InputError).
     The caller opens the undo transaction.  Returns the setup object."""
+    final = check_setup(doc, scan, workpiece, reference)
+    obj = setup_object(doc, create=True)
+    for role, value in final.items():
+        if getattr(obj, PROPERTIES[role]) is not value:
+            setattr(obj, PROPERTIES[role], value)
+    return obj
+
+
+def check_setup(doc, scan=UNCHANGED, workpiece=UNCHANGED, reference=UNCHANGED) -> dict:
+    """The setup these choices would give ({role: object or None}); InputError names a refused object.
+    Cheap (no tessellation) and changes nothing."""
     chosen = {"scan": scan, "workpiece": workpiece, "reference": reference}
     current = get_setup(doc)
     final = {role: current[role] if value is UNCHANGED else value for role, value in chosen.items()}
@@ -92,11 +103,7 @@ def set_setup(doc, scan=UNCHANGED, workpiece=UNCHANGED, reference=UNCHANGED):
         raise InputError(f"{final['workpiece'].Label!r} cannot be both the workpiece and the reference model")
     if final["scan"] is not None and final["scan"] in (final["workpiece"], final["reference"]):
         raise InputError(f"{final['scan'].Label!r} cannot be both the scan and a model")
-    obj = setup_object(doc, create=True)
-    for role, value in final.items():
-        if getattr(obj, PROPERTIES[role]) is not value:
-            setattr(obj, PROPERTIES[role], value)
-    return obj
+    return final
 
 
 def choose_models(doc, **chosen):

@@ -186,6 +186,18 @@ class CalibratedPathFeature(Feature):
         obj.Path = path
 
 
+def check_calibrated_path(calibration, source=None, *, force: bool = False) -> bool:
+    """Every refusal ``make_calibrated_path`` would raise, without touching the document (the GUI checks
+    before it records the command); returns whether it would be forced."""
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    source = source if source is not None else toolpath_of(calibration.Document)
+    _, forced = calibrated_path(read_source(source), result_of(calibration), force=force,
+                                source=f"calibration {calibration.Label!r}")
+    return forced
+
+
 def make_calibrated_path(calibration, source=None, *, force: bool = False):
     """The document's toolpath (or ``source``) carried into the robot base frame by ``calibration``'s
     W, as a new object in one undo step.  Refuses (CalibrationNotOk) a calibration that is not "ok"
@@ -197,8 +209,7 @@ def make_calibrated_path(calibration, source=None, *, force: bool = False):
     doc = calibration.Document
     source = source if source is not None else toolpath_of(doc)
     result = result_of(calibration)
-    _, forced = calibrated_path(read_source(source), result, force=force,
-                                source=f"calibration {calibration.Label!r}")  # refuse before touching the document
+    forced = check_calibrated_path(calibration, source, force=force)  # refuse before touching the document
     with transaction(doc, translate("WorkCal", "Calibrated toolpath")):
         obj = doc.addObject("Path::FeaturePython", "CalibratedToolpath")
         CalibratedPathFeature(obj)
@@ -218,6 +229,19 @@ def make_calibrated_path(calibration, source=None, *, force: bool = False):
 def calibrated_paths(calibration) -> list:
     """The calibrated toolpaths made from ``calibration``."""
     return [o for o in objects_of(calibration.Document, TYPE) if o.Calibration is calibration]
+
+
+def check_export(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options) -> None:
+    """Every refusal ``export_program`` would raise (CalibrationNotOk, ToolTilted, ExportRefused,
+    InputError), without writing anything (the GUI checks before it records the export)."""
+    from workcal_wb.core.toolpath.exporters import machine_for
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    source = source if source is not None else toolpath_of(calibration.Document)
+    fmt = fmt or format_for(path)
+    options = ExportOptions(force=force, calibration_source=f"calibration {calibration.Label!r}", **options)
+    checked_placement(read_source(source), result_of(calibration), options, machine_for(fmt, options.machine))
 
 
 def export_program(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options):

@@ -23,8 +23,9 @@ import FreeCAD
 FROM_SCANNER = FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 180)
 FIT_MARGIN = 1.1  # the fitted objects fill the view up to this factor (room for the labels)
 LABEL_NODE = "WorkCalLabels"
-LABEL_FONT, LABEL_SIZE = "Sans", 15
+LABEL_PIXELS, LABEL_PADDING = 14, 6
 LABEL_COLOUR = (0.1, 0.1, 0.12)
+LABEL_CLEARANCE_PX = 40  # labels whose anchors are closer than this on the screen would cover each other
 
 
 @contextmanager
@@ -50,35 +51,44 @@ def look_at(view, objects, orientation=None) -> None:
     """Turn the camera to ``orientation`` (None keeps it) and fit the view to ``objects`` alone."""
     from pivy import coin
 
-    group = coin.SoGroup()
-    for obj in objects:
-        vobj = getattr(obj, "ViewObject", None)
-        if vobj is not None and vobj.Visibility:
-            group.addChild(vobj.RootNode)
-    if group.getNumChildren() == 0:
+    box = bounding_box(o for o in objects if getattr(getattr(o, "ViewObject", None), "Visibility", False))
+    if box is None:
         return look(view, orientation)
+    stand_in = coin.SoSeparator()  # the box as geometry, for Coin's own fit
+    move = coin.SoTranslation()
+    move.translation = tuple(float(v) for v in box.mean(axis=0))
+    cube = coin.SoCube()
+    cube.width, cube.height, cube.depth = (float(max(v, 1e-6)) for v in box[1] - box[0])
+    stand_in.addChild(move)
+    stand_in.addChild(cube)
     with without_animation(view):
         if orientation is not None:
             view.setCameraOrientation(orientation)
-        camera = view.getCameraNode()
-        camera.viewAll(group, view.getViewer().getSoRenderManager().getViewportRegion(), FIT_MARGIN)
+        view.getCameraNode().viewAll(stand_in, view.getViewer().getSoRenderManager().getViewportRegion(),
+                                     FIT_MARGIN)
 
 
 def bounding_box(objects) -> np.ndarray | None:
-    """(2, 3) lower and upper corners of the objects' geometry in document coordinates (None if empty)."""
-    from pivy import coin
-
-    group = coin.SoGroup()
+    """(2, 3) lower and upper corners of the objects' geometry in document coordinates (None if none):
+    what the objects are, not what their view providers draw around them (legends, labels)."""
+    corners = []
     for obj in objects:
-        vobj = getattr(obj, "ViewObject", None)
-        if vobj is not None:
-            group.addChild(vobj.RootNode)
-    action = coin.SoGetBoundingBoxAction(coin.SbViewportRegion())
-    action.apply(group)
-    box = action.getBoundingBox()
-    if box.isEmpty():
+        commands = getattr(getattr(obj, "Path", None), "Commands", None)
+        if commands is not None:  # a Path's own BoundBox always holds the origin, where its drawing starts
+            ends = np.array([[c.Parameters[a] for a in "XYZ"] for c in commands
+                             if all(a in c.Parameters for a in "XYZ")], dtype=float).reshape(-1, 3)
+            if len(ends):
+                corners.append([ends.min(axis=0), ends.max(axis=0)])
+            continue
+        for name in ("Shape", "Mesh", "Points"):
+            box = getattr(getattr(obj, name, None), "BoundBox", None)
+            if box is not None and box.isValid():
+                corners.append([(box.XMin, box.YMin, box.ZMin), (box.XMax, box.YMax, box.ZMax)])
+                break
+    if not corners:
         return None
-    return np.array([box.getMin().getValue(), box.getMax().getValue()], dtype=float)
+    corners = np.asarray(corners, dtype=float)
+    return np.array([corners[:, 0].min(axis=0), corners[:, 1].max(axis=0)])
 
 
 def screen_box(view, points) -> tuple:
@@ -95,9 +105,45 @@ def box_corners(box: np.ndarray) -> np.ndarray:
     return np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
+def text_image(text: str, pixels: int = LABEL_PIXELS):
+    """A label as a QImage: the text in the application's font on a light rounded box (legible over any
+    scene), transparent around it."""
+    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+
+    font = QtGui.QFont(QtWidgets.QApplication.font())
+    font.setPixelSize(pixels)
+    metrics = QtGui.QFontMetrics(font)
+    width = metrics.boundingRect(text).width() + 2 * LABEL_PADDING + 2
+    height = metrics.height() + LABEL_PADDING + 2
+    image = QtGui.QImage(width, height, QtGui.QImage.Format_RGBA8888)
+    image.fill(QtGui.QColor(0, 0, 0, 0))
+    painter = QtGui.QPainter(image)
+    painter.setRenderHint(QtGui.QPainter.Antialiasing, True)
+    painter.setFont(font)
+    painter.setPen(QtGui.QColor(110, 110, 110))
+    painter.setBrush(QtGui.QColor(255, 255, 255, 225))
+    painter.drawRoundedRect(QtCore.QRectF(0.5, 0.5, width - 1, height - 1), 4, 4)
+    painter.setPen(QtGui.QColor(*[int(255 * c) for c in LABEL_COLOUR]))
+    painter.drawText(LABEL_PADDING + 1, LABEL_PADDING // 2 + 1 + metrics.ascent(), text)
+    painter.end()
+    return image
+
+
+def image_node(image, horizontal: str = "CENTER", vertical: str = "BOTTOM"):
+    """A Coin node drawing ``image`` (QImage, RGBA) pixel for pixel, anchored at the current position."""
+    from pivy import coin
+
+    flipped = image.mirrored(False, True)  # Coin's rows go bottom-up
+    node = coin.SoImage()
+    node.image.setValue(coin.SbVec2s(image.width(), image.height()), 4, bytes(flipped.constBits()))
+    node.horAlignment = getattr(coin.SoImage, horizontal)
+    node.vertAlignment = getattr(coin.SoImage, vertical)
+    return node
+
+
 class Labels:
     """Plain-word labels in a 3D view: each a text at a point of the document, drawn over the scene
-    (never hidden by it) in a proportional font."""
+    (never hidden by it) on a light box, in the application's font."""
 
     def __init__(self, view):
         from pivy import coin
@@ -109,28 +155,20 @@ class Labels:
         view.getSceneGraph().addChild(self.root)
 
     def show(self, labels) -> None:
-        """Replace the labels by ``labels``: (text, (x, y, z)) pairs."""
+        """Replace the labels by ``labels``: (text, (x, y, z)) pairs; the text's box sits above the point."""
         from pivy import coin
 
         self.root.removeAllChildren()
         self.texts = [text for text, _ in labels]
-        if not labels:
-            return
-        colour = coin.SoBaseColor()
-        colour.rgb = LABEL_COLOUR
-        font = coin.SoFont()
-        font.name, font.size = LABEL_FONT, LABEL_SIZE
-        for node in (colour, font):
-            self.root.addChild(node)
+        pick = coin.SoPickStyle()
+        pick.style = coin.SoPickStyle.UNPICKABLE
+        self.root.addChild(pick)
         for text, point in labels:
             sep = coin.SoSeparator()
             move = coin.SoTranslation()
             move.translation = tuple(float(v) for v in point)
-            label = coin.SoText2()
-            label.string = text
-            label.justification = coin.SoText2.CENTER
-            for node in (move, label):
-                sep.addChild(node)
+            sep.addChild(move)
+            sep.addChild(image_node(text_image(text)))
             self.root.addChild(sep)
 
     def remove(self) -> None:
@@ -140,15 +178,29 @@ class Labels:
             pass
 
 
-def label_point(view, box: np.ndarray) -> tuple:
-    """Where a label of the object in ``box`` goes: above its top edge as the camera sees it."""
+def label_points(view, boxes) -> list:
+    """Where the labels of the objects in ``boxes`` go: above each object's top edge as the camera sees it,
+    else below its bottom edge, else on its middle: the first place on the screen that covers no earlier
+    label."""
     from pivy import coin
 
+    from workcal_wb.gui.picking import project
+
+    width, height = view.getSize()
     up = np.array(view.getCameraNode().orientation.getValue().multVec(coin.SbVec3f(0, 1, 0)).getValue())
-    centre = box.mean(axis=0)
-    half = box_corners(box) - centre
-    reach = float(np.max(half @ up))
-    return tuple(centre + up * reach * 1.08)
+    placed, taken = [], []
+    for box in boxes:
+        centre = box.mean(axis=0)
+        reach = float(np.max((box_corners(box) - centre) @ up)) * 1.08
+        candidates = [centre + side * up * reach for side in (1.0, -1.0, 0.0)]
+        screen = project(view, np.array(candidates))[0]
+        fits = [LABEL_CLEARANCE_PX <= x <= width - LABEL_CLEARANCE_PX and 0 <= y <= height - LABEL_CLEARANCE_PX
+                and all(np.abs(np.array([x, y]) - other).max() > LABEL_CLEARANCE_PX for other in taken)
+                for x, y in screen]
+        choice = fits.index(True) if any(fits) else 2
+        placed.append(tuple(candidates[choice]))
+        taken.append(screen[choice])
+    return placed
 
 
 def navigation_cube_rect(width: int, height: int):

@@ -74,16 +74,15 @@ def import_scan_files(paths, units: str | None = None, doc=None) -> list:
         FreeCADGui.runCommand("Std_New")  # recorded by FreeCAD itself: App.newDocument(...)
     doc = doc or FreeCAD.ActiveDocument
     created = []
-    for path in paths:
-        if os.path.splitext(path)[1].lower() not in fc_scan.FREECAD_POINT_FORMATS:  # FreeCAD's reader: main thread
+    for path in paths:  # read first (remembered): a file that cannot be read is refused before it is recorded
+        if os.path.splitext(path)[1].lower() in fc_scan.FREECAD_POINT_FORMATS:  # FreeCAD's reader: main thread
+            fc_scan.read_scan_file(path, units)
+        else:
             run_in_background(lambda p=path: fc_scan.read_scan_file(p, units),
                               translate("WorkCal", "Reading {}...").format(os.path.basename(path)),
                               translate("WorkCal", "Import scan"))
         created.append(replay.run("workcal_wb.fc.scan.import_scan", doc, path, units, result="scan"))
     FreeCAD.ParamGet(fc_scan.PARAMS).SetString(LAST_DIR_KEY, os.path.dirname(os.path.abspath(paths[-1])))
-    FreeCADGui.Selection.clearSelection()
-    for obj in created:
-        FreeCADGui.Selection.addSelection(obj)
     return created
 
 

@@ -23,8 +23,13 @@ PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
 
 def choose_models(doc=None, **chosen):
     """Store the chosen objects (keywords scan/workpiece/reference; None clears, omitted stays) as one
-    undo step.  InputError names a refused object; the document is then unchanged."""
-    return replay.run("workcal_wb.fc.setup.choose_models", doc or active_document(), result="setup", **chosen)
+    undo step.  InputError names a refused object, before anything is recorded; the document is then
+    unchanged."""
+    from workcal_wb.fc.setup import check_setup
+
+    doc = doc or active_document()
+    check_setup(doc, **chosen)
+    return replay.run("workcal_wb.fc.setup.choose_models", doc, result="setup", **chosen)
 
 
 def import_model(path, doc=None, units: str | None = None, role: str | None = None):
@@ -36,6 +41,7 @@ def import_model(path, doc=None, units: str | None = None, role: str | None = No
     ext = os.path.splitext(str(path))[1].lower()
     if units is None and ext not in fc_models.CAD_EXTENSIONS:
         units = ask_units()
+    fc_models.read_model_file(path, units or "mm")  # a file that cannot be read is refused before it is recorded
     obj = replay.run("workcal_wb.fc.models.import_model", doc, str(path), units or "mm", result="model")
     FreeCAD.ParamGet(PARAMS).SetString(LAST_DIR_KEY, os.path.dirname(os.path.abspath(str(path))))
     if role is not None:

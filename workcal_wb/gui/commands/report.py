@@ -27,6 +27,9 @@ translate = FreeCAD.Qt.translate
 def deviation_map(calibration, limit_mm: float | None = None):
     """The deviation map of a calibration's workpiece region (recorded ``fc.deviation_map.make_deviation_map``),
     shown instead of the scan."""
+    from workcal_wb.fc.calibration_object import workpiece_region
+
+    workpiece_region(calibration)  # no U, no region, a changed scan: refused before it is recorded
     kwargs = {"limit_mm": limit_mm} if limit_mm else {}
     obj = replay.run("workcal_wb.fc.deviation_map.make_deviation_map", calibration, result="deviation_map", **kwargs)
     if calibration.Scan is not None and getattr(calibration.Scan, "ViewObject", None) is not None:

@@ -24,6 +24,9 @@ PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
 
 def choose_toolpath(doc, source):
     """Remember the document's toolpath (recorded ``fc.setup.choose_toolpath``, one undo step)."""
+    from workcal_wb.fc.toolpath import read_source
+
+    read_source(source)  # a file that is no toolpath is refused before anything is recorded
     if isinstance(source, (str, os.PathLike)):
         FreeCAD.ParamGet(PARAMS).SetString(LAST_DIR_KEY, os.path.dirname(os.path.abspath(os.fspath(source))))
     return replay.run("workcal_wb.fc.setup.choose_toolpath", doc, source, result="setup")
@@ -54,13 +57,21 @@ def ask_for_toolpath_file(doc) -> str:
 
 
 def transform_toolpath(calibration, force: bool = False):
-    """The document's toolpath in the robot base frame (recorded ``fc.toolpath.make_calibrated_path``)."""
+    """The document's toolpath in the robot base frame (recorded ``fc.toolpath.make_calibrated_path``;
+    a refusal is raised before anything is recorded, so a macro holds only what worked)."""
+    from workcal_wb.fc.toolpath import check_calibrated_path
+
+    check_calibrated_path(calibration, force=force)
     return replay.run("workcal_wb.fc.toolpath.make_calibrated_path", calibration, force=force,
                       result="calibrated_toolpath")
 
 
 def export_program(calibration, path, fmt=None, force: bool = False, **options):
-    """The document's toolpath as a robot/CNC program (recorded ``fc.toolpath.export_program``)."""
+    """The document's toolpath as a robot/CNC program (recorded ``fc.toolpath.export_program``; a refusal
+    is raised before anything is recorded)."""
+    from workcal_wb.fc.toolpath import check_export
+
+    check_export(calibration, os.fspath(path), fmt, force=force, **options)
     return replay.run("workcal_wb.fc.toolpath.export_program", calibration, os.fspath(path), fmt, force=force,
                       result="program", **options)
 

@@ -195,6 +195,9 @@ class GuidePanel:
             return
         step = self.steps[name]
         self.shown = name
+        for other in self.steps.values():  # the stack takes the height of the page shown, not of the tallest
+            policy = QtWidgets.QSizePolicy.Preferred if other is step else QtWidgets.QSizePolicy.Ignored
+            other.widget.setSizePolicy(policy, policy)
         self.stack.setCurrentWidget(step.widget)
         self.page_title.setText(f"{list(self.steps).index(name) + 1}. {step.HEADING}")
         step.refresh()
@@ -222,12 +225,11 @@ class GuidePanel:
             orientation = scene.orientation
         gui_view.look_at(view, scene.fit or scene.show, orientation)
         if self.labels is not None:
-            labels = []
-            for text, where in scene.labels:
-                box = where if not hasattr(where, "ViewObject") else gui_view.bounding_box([where])
-                if box is not None:
-                    labels.append((text, gui_view.label_point(view, box)))
-            self.labels.show(labels)
+            boxes = [(text, where if not hasattr(where, "ViewObject") else gui_view.bounding_box([where]))
+                     for text, where in scene.labels]
+            boxes = [(text, box) for text, box in boxes if box is not None]
+            points = gui_view.label_points(view, [box for _, box in boxes])
+            self.labels.show([(text, point) for (text, _), point in zip(boxes, points)])
 
     def _calibration_objects(self) -> list:
         """What the guide shows and hides: the chosen scan and models, and WorkCal's own objects."""

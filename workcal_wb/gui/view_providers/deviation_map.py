@@ -12,7 +12,7 @@ import numpy as np
 
 import FreeCAD
 
-from workcal_wb.gui.view import navigation_cube_rect
+from workcal_wb.gui.view import image_node, navigation_cube_rect
 from workcal_wb.gui.view_providers.base import ViewProvider
 
 translate = FreeCAD.Qt.translate
@@ -148,12 +148,8 @@ class ViewProviderDeviationMap(ViewProvider):
             return
         image, _ = legend_image(scale)
         self.image_size = (image.width(), image.height())
-        flipped = image.mirrored(False, True)  # Coin's rows go bottom-up
-        node = coin.SoImage()
-        node.image.setValue(coin.SbVec2s(image.width(), image.height()), 4, bytes(flipped.constBits()))
-        node.horAlignment = coin.SoImage.RIGHT
         bottom = legend_corner() == "bottom"
-        node.vertAlignment = coin.SoImage.BOTTOM if bottom else coin.SoImage.TOP
+        node = image_node(image, "RIGHT", "BOTTOM" if bottom else "TOP")
         camera = coin.SoOrthographicCamera()
         camera.viewportMapping = coin.SoCamera.LEAVE_ALONE  # x, y in -1..1 whatever the window shape
         camera.position = (0.0, 0.0, 5.0)

@@ -35,6 +35,7 @@ class Step:
         layout = QtWidgets.QVBoxLayout(self.widget)
         layout.setContentsMargins(0, 0, 0, 0)
         self.build(layout)
+        layout.addStretch(1)
 
     def build(self, layout) -> None:
         raise NotImplementedError

@@ -134,7 +134,8 @@ def robot_frame_scene(step) -> Scene:
                      labels=[(translate("WorkCal", "Workpiece model: the toolpath's frame"), model)] if model else [],
                      orientation="isometric")
     shown = [path, placed] + ([setup["reference"]] if setup["reference"] is not None else [])
-    labels = [(translate("WorkCal", "Toolpath, robot frame"), path), (translate("WorkCal", "Workpiece, placed"), placed)]
+    labels = [(translate("WorkCal", "Toolpath in the robot frame"), path),
+              (translate("WorkCal", "Workpiece, placed"), placed)]
     if setup["reference"] is not None:
         labels.append((translate("WorkCal", "Reference object"), setup["reference"]))
     return Scene(show=shown, fit=[path, placed], labels=labels, orientation="isometric")
