@@ -15,7 +15,16 @@ from workcal_wb.gui import commands  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets  # noqa: E402
 from workcal_wb.gui.view import without_animation  # noqa: E402
 
-TREE_ICONS = ("WorkCal_Scan", "WorkCal_Calibration", "WorkCal_Setup")
+
+def tree_icons() -> list:
+    """The icon of every view provider in the registry, and the preference page's."""
+    import importlib
+
+    from workcal_wb.gui.view_providers import REGISTRY
+
+    icons = [getattr(importlib.import_module(module), cls).ICON
+             for module, cls in (target.split(":") for target in REGISTRY.values())]
+    return icons + ["preferences-workcal"]
 
 
 def names(entries):
@@ -91,7 +100,7 @@ def test_menu_shows_every_command_in_order(workbench):
 
 
 def test_every_icon_file_exists_and_renders(workbench):
-    paths = [workcal_wb.icon("WorkCal")] + [workcal_wb.icon(n) for n in TREE_ICONS]
+    paths = [workcal_wb.icon("WorkCal")] + [workcal_wb.icon(n) for n in tree_icons()]
     for name, command in commands.commands().items():
         resources = command.GetResources()
         assert resources["Pixmap"] == workcal_wb.icon(name), "icon named after its command"

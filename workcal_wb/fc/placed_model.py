@@ -185,32 +185,38 @@ def show_candidate(calibration, candidate: int):
 
 # Of the model's points, the share that moves most between two poses: where a scan tells them apart.
 TELLING_SHARE = 0.1
+# The model is its own image under the turn between two poses when this share of its points lands
+# within the tolerance of its surface (the rest: edges and sampling).
+SYMMETRIC_SHARE = 0.95
 
 
 def tie_breaker(calibration, role: str, candidate: int = 1) -> str:
     """The sentence on what would tell the calibration's pose of ``role`` from its ``candidate``-th rival:
-    where on the model the two differ most, or that no scan can when the model itself is symmetric."""
+    where on the model the two differ most, or that no scan can when the model is symmetric under the
+    turn between them."""
+    from workcal_wb.core.surface import SurfaceModel
     from workcal_wb.fc.calibration_object import result_of
 
     poses = candidate_poses(calibration, role)
     if len(poses) <= candidate:
         return ""
-    match = getattr(result_of(calibration), role)
+    result = result_of(calibration)
     name = translate("WorkCal", "workpiece") if role == "workpiece" else translate("WorkCal", "reference object")
-    symmetries = getattr(match, "symmetries", None) or []
-    if symmetries:
-        return translate("WorkCal", "The {} model is symmetric ({}): no scan can tell these poses apart. A feature "
-                                    "that breaks the symmetry (a mark, a fixture) would.").format(
-            name, symmetries[0].get("description", ""))
     source = calibration.Workpiece if role == "workpiece" else calibration.Reference
-    points = models.model_cloud(source, role=role).points
-    moved = np.linalg.norm(frames.apply(poses[0], points) - frames.apply(poses[candidate], points), axis=1)
-    tolerance = result_of(calibration).tolerance_mm
-    if moved.max() <= tolerance:
-        return translate("WorkCal", "The two poses of the {} differ by at most {:.2f} mm anywhere on it, within "
-                                    "the tolerance.").format(name, moved.max())
-    telling = points[moved >= np.quantile(moved, 1 - TELLING_SHARE)]
+    cloud = models.model_cloud(source, role=role)
+    surface = SurfaceModel(cloud)
+    points = surface.points
+    turn = frames.invert(poses[0]) @ poses[candidate]  # the rival pose, seen in the best pose's model frame
+    moved = frames.apply(turn, points)
+    distance, idx, found = surface.nearest(moved, 3 * surface.spacing + result.tolerance_mm)
+    onto = found & (np.abs(surface.plane_residuals(moved, idx)) <= result.tolerance_mm)
+    if onto.mean() >= SYMMETRIC_SHARE:
+        return translate("WorkCal", "The {} model is symmetric: turned as the other pose turns it, it covers "
+                                    "itself, so no scan can tell these poses apart; only a feature that breaks "
+                                    "the symmetry (a mark, a fixture) would.").format(name)
+    apart = np.linalg.norm(moved - points, axis=1)
+    telling = points[apart >= np.quantile(apart, 1 - TELLING_SHARE)]
     x, y, z = telling.mean(axis=0)
     return translate("WorkCal", "The two poses of the {} differ most around ({:.0f}, {:.0f}, {:.0f}) mm on its "
                                 "model, by up to {:.1f} mm: a scan that sees that part clearly, or a region picked to "
-                                "include it, would tell them apart.").format(name, x, y, z, moved.max())
+                                "include it, would tell them apart.").format(name, x, y, z, apart.max())

@@ -62,6 +62,8 @@ def run(function: str, *args, result: str = "_", **kwargs):
 
     if not function.startswith(PREFIX):
         raise ValueError(f"{function}: only workcal_wb.fc functions are recorded (a macro must replay headless)")
-    FreeCADGui.addModule(function.rsplit(".", 1)[0])
+    # Not FreeCADGui.addModule: it writes the import only the first time in a session, so a macro recorded
+    # later would lack it and fail when it replays in a fresh freecadcmd.
+    FreeCADGui.doCommand(f"import {function.rsplit('.', 1)[0]}")
     FreeCADGui.doCommand(f"{result} = {call_text(function, *args, **kwargs)}")
     return vars(sys.modules["__main__"]).get(result)

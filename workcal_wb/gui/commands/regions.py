@@ -118,12 +118,24 @@ def auto_regions(scan=None, workpiece=None, reference=None) -> dict:
     run_in_background(lambda: fc_regions.find_regions(clouds, blas_threads=None),
                       translate("WorkCal", "Finding the workpiece and the reference in {}...").format(scan.Label),
                       translate("WorkCal", "Automatic regions"))
-    return replay.run("workcal_wb.fc.regions.auto_regions", scan, workpiece, reference, result="regions")
+    found = replay.run("workcal_wb.fc.regions.auto_regions", scan, workpiece, reference, result="regions")
+    _update_display(scan)
+    return found
 
 
 def clear_regions(scan=None) -> bool:
     """Remove both regions of the scan (recorded, one undo step); False (and a warning) when there were none."""
-    return replay.run("workcal_wb.fc.regions.clear_regions", scan or target_scan(), result="cleared")
+    scan = scan or target_scan()
+    cleared = replay.run("workcal_wb.fc.regions.clear_regions", scan, result="cleared")
+    _update_display(scan)
+    return cleared
+
+
+def _update_display(scan) -> None:
+    """The region colours at once (the view provider's own update waits for the event loop)."""
+    from workcal_wb.gui import region_display
+
+    region_display.update(scan)
 
 
 class AutoRegionsCommand(Command):
