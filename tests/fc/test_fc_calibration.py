@@ -75,8 +75,8 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
     np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-6)  # the object sits at W in B
     assert cal.EulerZYZ == co.euler_text(W) and "phi" in cal.EulerZYZ
     assert cal.Omega.Value == pytest.approx(frames.omega(W))
-    assert 0 < cal.WorkpieceRMS.Value < 0.3 and 0 < cal.ReferenceRMS.Value < 0.3
-    assert 0 < cal.SurfaceBound.Value < 0.3
+    assert 0 < cal.PartRMS.Value < 0.3 and 0 < cal.RefRMS.Value < 0.3
+    assert 0 < cal.AtSurface.Value < 0.3
     assert cal.getEnumerationsOfProperty("Status") == co.STATUSES and not cal.Accepted
     assert cal.FrameSize.Value == pytest.approx(co.FRAME_FRACTION * scene.workpiece_model().diagonal())
     assert cal.Scan == objs["scan"] and cal.Workpiece == objs["workpiece"] and cal.Reference == objs["reference"]
@@ -273,12 +273,12 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     assert len(d) == len(co.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
     assert len(dev.Color) == len(d)
     assert np.nanmax(d) > 1.0  # the lump stands out of the model
-    assert dev.Max.Value > 1.0 and dev.WithinTolerance > 50
+    assert dev.Max.Value > 1.0 and dev.Within > 50
     colours = np.array(dev.Color)[:, :3]
     assert np.allclose(colours[int(np.nanargmax(d))], BEYOND_ADDED, atol=1 / 255)  # past the limit: dark red
     # Read against the tolerance: the lump's flanks, out of tolerance by a little, are plainly not green
     # (a scale stretched to the data's extremes painted them green).
-    assert dev.AutoLimit and dev.ColourLimit.Value == pytest.approx(3 * dev.Tolerance.Value)
+    assert dev.AutoLimit and dev.Limit.Value == pytest.approx(3 * dev.Tolerance.Value)
     flank = np.flatnonzero((d > 1.3 * dev.Tolerance.Value) & (d < 2.5 * dev.Tolerance.Value))
     assert len(flank) > 5
     assert np.linalg.norm(colours[flank] - np.array(WITHIN), axis=1).min() > 0.5
@@ -329,11 +329,11 @@ def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     gcode.write_text(format_gcode(sample_toolpath(scene)), encoding="utf-8")
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], toolpath=str(gcode),
                               seed=SEED)
-    assert cal.ToolpathFile == str(gcode) and cal.Toolpath is None
+    assert cal.GcodeFile == str(gcode) and cal.Toolpath is None
     result = co.result_of(cal)
     assert result.inputs["toolpath_points"] > 100
-    assert 0 < cal.ToolpathBound.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
-    assert cal.ToolpathBound.Value < 0.3
+    assert 0 < cal.AtToolpath.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
+    assert cal.AtToolpath.Value < 0.3
     calls = []
     original = co.fc_inputs.run
     co.fc_inputs.run = lambda *a, **k: calls.append(1) or original(*a, **k)

@@ -64,7 +64,7 @@ def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
     assert setup.toolpath_of(doc) == scene["gcode"] and doc.UndoNames[0] == "Choose toolpath"
     cal = co.make_calibration(doc, seed=SEED, resamples=2)  # scan, models and toolpath from the setup
     assert cal.Status == "ok", cal.Reasons
-    assert cal.ToolpathFile == scene["gcode"] and co.result_of(cal).inputs["toolpath_points"] > 100
+    assert cal.GcodeFile == scene["gcode"] and co.result_of(cal).inputs["toolpath_points"] > 100
     # The calibrated toolpath: the chosen toolpath carried into B by W, a Path object that follows W.
     path_obj = toolpath.make_calibrated_path(cal)
     assert proxies.type_of(path_obj) == toolpath.TYPE and toolpath.calibrated_paths(cal) == [path_obj]
@@ -134,7 +134,7 @@ def test_the_report_uses_the_deviation_map_scale(doc, tmp_path):
     assert json.loads(open(paths["json"]).read())["deviation"]["colour_scale"]["limit_mm"] == pytest.approx(
         3 * cal.Tolerance.Value)
     dev = make_deviation_map(cal, limit_mm=2.0)
-    assert not dev.AutoLimit and dev.ColourLimit.Value == pytest.approx(2.0)
+    assert not dev.AutoLimit and dev.Limit.Value == pytest.approx(2.0)
     paths = report.write_report(cal, str(tmp_path / "with_map"))
     data = json.loads(open(paths["json"]).read())
     assert data["deviation"]["colour_scale"] == {"tolerance_mm": pytest.approx(cal.Tolerance.Value),
@@ -148,6 +148,15 @@ def test_one_identity_scheme_and_older_files_lose_their_role_property(doc, tmp_p
     assert all(not hasattr(o, "WorkCalRole") for o in doc.Objects)
     cal.addProperty("App::PropertyString", "WorkCalRole", "Base", "how WorkCal 0.1 recognised its objects")
     cal.WorkCalRole = "WorkCalCalibration"
+    # As WorkCal 0.1 saved it: long property names, W also as a matrix, the status as text.
+    W = matrix_of(cal.W)
+    cal.removeProperty("Frames")
+    cal.addProperty("App::PropertyBool", "ShowFrames", "Display", "")
+    cal.ShowFrames = False
+    cal.removeProperty("Status")
+    cal.addProperty("App::PropertyString", "Status", "Result", "")
+    cal.Status = "ok"
+    cal.addProperty("App::PropertyMatrix", "WMatrix", "Result", "")
     path = str(tmp_path / "older.FCStd")
     doc.saveAs(path)
     name = cal.Name
@@ -157,6 +166,10 @@ def test_one_identity_scheme_and_older_files_lose_their_role_property(doc, tmp_p
         cal = reopened.getObject(name)
         assert co.is_calibration(cal) and "WorkCalRole" not in cal.PropertiesList
         assert co.find_calibrations(reopened) == [cal]
+        assert {"ShowFrames", "WMatrix"}.isdisjoint(cal.PropertiesList) and cal.Frames is False
+        assert cal.getTypeIdOfProperty("Status") == "App::PropertyEnumeration" and cal.Status == "ok"
+        np.testing.assert_allclose(matrix_of(cal.W), W, atol=1e-9)
+        assert "Touched" not in cal.State
     finally:
         FreeCAD.closeDocument(reopened.Name)
 

@@ -248,6 +248,56 @@ def test_04_calibrate_through_the_guide(step, output_dir, page_fits):
     screenshot(output_dir, "04_placed_model_on_reference.png", only=[placed, flow["reference"], cal])
 
 
+def property_names_cut_off(obj) -> list:
+    """The names of WorkCal's properties of ``obj`` that the property editor (FreeCAD's default panel
+    width) cannot show whole: a name wider than its cell is elided."""
+    window = FreeCADGui.getMainWindow()
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(obj)
+    pump(0.3)
+    editors = [t for t in window.findChildren(QtWidgets.QTreeView)
+               if t.isVisible() and t.model() is not None and t.model().columnCount() == 2
+               and str(t.model().headerData(0, QtCore.Qt.Horizontal)) == "Property"]
+    assert editors, "no property editor in the main window"
+    tree, ours = editors[0], set(obj.PropertiesList) - set(FreeCAD.ActiveDocument.addObject(
+        obj.TypeId.replace("Python", ""), "Plain").PropertiesList)
+    FreeCAD.ActiveDocument.removeObject("Plain")
+    model = tree.model()
+    cut = []
+    for group in (model.index(row, 0) for row in range(model.rowCount())):
+        tree.expand(group)
+        for row in range(model.rowCount(group)):
+            index = model.index(row, 0, group)
+            text = str(index.data())
+            if text.replace(" ", "") not in ours:
+                continue
+            needed = tree.fontMetrics().boundingRect(text).width() + 6  # the cell's margins
+            if needed > tree.visualRect(index).width():
+                cut.append(f"{text}: {needed} px in {tree.visualRect(index).width()} px")
+    FreeCADGui.Selection.clearSelection()
+    return cut
+
+
+def test_04b_result_properties_read_whole(step):
+    """The property editor shows every name of WorkCal's properties whole at FreeCAD's default panel
+    width (names such as "WorkpieceWithinTolerance" used to be cut off)."""
+    from workcal_wb.fc.deviation_map import make_deviation_map
+    from workcal_wb.gui.task_panels import QtWidgets as widgets
+
+    combo = [d for d in FreeCADGui.getMainWindow().findChildren(widgets.QDockWidget) if d.objectName() == "Combo View"]
+    tabs = combo[0].findChild(widgets.QTabWidget) if combo else None
+    if tabs is not None:
+        tabs.setCurrentIndex(0)  # the Model tab, with the property editor
+    cal = step["cal"]
+    dev = make_deviation_map(cal)
+    try:
+        objects = [cal, dev, placed_model.find(cal, "workpiece", placed_model.ON_SCAN), cal.Scan]
+        cut = [f"{o.Label}: {c}" for o in objects for c in property_names_cut_off(o)]
+    finally:
+        step["doc"].removeObject(dev.Name)
+    assert not cut, cut
+
+
 def test_05_save_close_reopen(step, output_dir):
     flow = step
     doc, cal = flow["doc"], flow["cal"]
@@ -285,7 +335,7 @@ def test_06_deviation_map_shows_the_lump(step, output_dir):
     assert doc.UndoCount == undo_before + 1 and not cal.Scan.ViewObject.Visibility
     d = np.array(dev.Deviations)
     assert np.nanmax(d) > 1.0 and dev.Max.Value > 1.0  # the clay lump stands out
-    assert dev.WithinTolerance > 50
+    assert dev.Within > 50
     assert dev.ViewObject.DisplayMode == "Color"
     vp = dev.ViewObject.Proxy
     assert vp.switch.whichChild.getValue() == 0 and vp.legend.getNumChildren() > 0  # colour bar shown

@@ -168,12 +168,13 @@ def test_03_regions(step, shoot_window, check_page, scan_share):
     shoot_window("03_regions")
 
 
-def test_04_calibrate(step, shoot_window, check_page):
+def test_04_calibrate(step, shoot_window, check_page, scan_share):
     panel = guide()
     assert panel.next_step() == "calibrate"
     panel.go("calibrate")
     page = panel.steps["calibrate"]
     check_page(panel, "calibrate")
+    assert scan_share(step["doc"]) >= 1 / 3
     assert page.auto_regions.isChecked() is False and page.picked_regions.isChecked()  # the regions just found
     assert not page.advanced.isVisible()  # method, seed, refits: out of the way
     page.advanced_toggle.click()
@@ -227,7 +228,8 @@ def test_05_result(step, shoot_window, check_page, scan_share):
 
 def test_06_deviation_map(step, shoot_window, settle, view_share):
     from workcal_wb.gui.view import navigation_cube_rect
-    from workcal_wb.gui.view_providers.deviation_map import FONT_PIXELS, legend_rect
+    from workcal_wb.fc.deviation_map import scale_of
+    from workcal_wb.gui.view_providers.deviation_map import FONT_PIXELS, legend_image, legend_rect
 
     panel = guide()
     panel.go("result")
@@ -238,17 +240,37 @@ def test_06_deviation_map(step, shoot_window, settle, view_share):
 
     [dev] = deviation_maps(step["cal"])
     assert dev.ViewObject.Visibility and not panel.calibration().Scan.ViewObject.Visibility
-    assert dev.ColourLimit.Value == pytest.approx(3 * dev.Tolerance.Value)  # against the tolerance
+    assert dev.Limit.Value == pytest.approx(3 * dev.Tolerance.Value)  # against the tolerance
     vp = dev.ViewObject.Proxy
     assert vp.switch.whichChild.getValue() == 0
     width, height = FreeCADGui.ActiveDocument.ActiveView.getSize()
-    legend = legend_rect(vp.image_size, (width, height))
-    cube = navigation_cube_rect(width, height)
-    assert cube is not None
-    overlap_x = min(legend[2], cube[2]) - max(legend[0], cube[0])
-    overlap_y = min(legend[3], cube[3]) - max(legend[1], cube[1])
-    assert overlap_x <= 0 or overlap_y <= 0, f"legend {legend} overlaps the navigation cube {cube}"
-    assert FONT_PIXELS >= 12 and vp.image_size[1] < height - (cube[3] - cube[1])
+
+    def clear_of_the_cube():
+        legend = legend_rect(vp.image_size, (width, height))
+        cube = navigation_cube_rect(width, height)
+        assert cube is not None
+        overlap_x = min(legend[2], cube[2]) - max(legend[0], cube[0])
+        overlap_y = min(legend[3], cube[3]) - max(legend[1], cube[1])
+        assert overlap_x <= 0 or overlap_y <= 0, f"legend {legend} overlaps the navigation cube {cube}"
+        return legend
+
+    assert clear_of_the_cube()[3] == height  # the cube sits top right by default: the legend bottom right
+    assert FONT_PIXELS >= 12 and legend_image(scale_of(dev))[1].pixelSize() >= 12  # legible
+    assert vp.image_size[1] < height - 132
+    # With the cube moved to the bottom-right corner (both FreeCAD versions' preferences), the legend
+    # moves to the top.
+    groups = [FreeCAD.ParamGet(f"User parameter:BaseApp/Preferences/{g}") for g in ("View", "NaviCube")]
+    try:
+        for group in groups:
+            group.SetInt("CornerNaviCube", 3)
+        dev.Legend = False
+        dev.Legend = True
+        assert clear_of_the_cube()[1] == 0
+    finally:
+        for group in groups:
+            group.RemInt("CornerNaviCube")
+        dev.Legend = False
+        dev.Legend = True
     assert view_share(np.array([tuple(p) for p in dev.Points.Points])) >= 1 / 3
     shoot_window("06_deviation_map")
     page.map_button.click()  # back to the scan

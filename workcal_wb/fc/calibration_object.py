@@ -52,7 +52,7 @@ INPUT_PROPERTIES = [
         "App::Property", "The fixed reference object's model, where it stands in the robot base frame (B-P in B)")),
     ("App::PropertyLink", "Toolpath", "Inputs", QT_TRANSLATE_NOOP(
         "App::Property", "Optional Path/CAM Job or operation: the uncertainty is reported at its cutting points")),
-    ("App::PropertyFile", "ToolpathFile", "Inputs", QT_TRANSLATE_NOOP(
+    ("App::PropertyFile", "GcodeFile", "Inputs", QT_TRANSLATE_NOOP(
         "App::Property", "Optional G-code file (used when Toolpath is empty): the uncertainty is reported at its "
                          "cutting points")),
 ]
@@ -67,15 +67,16 @@ OPTION_PROPERTIES = [
                          "on the scan")),
     ("App::PropertyInteger", "Seed", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Random seed of the search and the uncertainty estimate: the same seed gives the same W")),
-    ("App::PropertyInteger", "Resamples", "Options", QT_TRANSLATE_NOOP(
+    ("App::PropertyInteger", "Refits", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Refits of both matches the uncertainty is estimated from (bootstrap)")),
-    ("App::PropertyBool", "ShowFrames", "Display", QT_TRANSLATE_NOOP(
+    ("App::PropertyBool", "Frames", "Display", QT_TRANSLATE_NOOP(
         "App::Property", "Show the axes of the robot base frame (B), the scanner frame (S) and the workpiece "
                          "frame (X)")),
     ("App::PropertyLength", "FrameSize", "Display", QT_TRANSLATE_NOOP(
         "App::Property", "Length of the frame axes")),
 ]
-# Short names: they must fit the property editor's first column at FreeCAD's default panel width.
+# Short names: they must fit the property editor's first column at FreeCAD's default panel width
+# (about ten characters: tests/gui/test_calibrate_flow.py measures them).
 RESULT_PROPERTIES = [
     ("App::PropertyEnumeration", "Status", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "ok: W can be used; ambiguous: another pose fits almost as well; failed: W must not be "
@@ -92,20 +93,20 @@ RESULT_PROPERTIES = [
     ("App::PropertyPlacement", "V", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "Where the robot base is in the scan: V = ^S B, the robot base frame B in the scanner "
                          "frame S (from the reference object)")),
-    ("App::PropertyLength", "WorkpieceRMS", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyLength", "PartRMS", "Fit", QT_TRANSLATE_NOOP(
         "App::Property", "RMS distance of the workpiece's scan points to its model")),
-    ("App::PropertyLength", "ReferenceRMS", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyLength", "RefRMS", "Fit", QT_TRANSLATE_NOOP(
         "App::Property", "RMS distance of the reference object's scan points to its model")),
-    ("App::PropertyLength", "ToolpathBound", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyLength", "AtToolpath", "Uncertainty", QT_TRANSLATE_NOOP(
         "App::Property", "How far a toolpath point may be off because of the calibration (0 without a toolpath)")),
-    ("App::PropertyLength", "SurfaceBound", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyLength", "AtSurface", "Uncertainty", QT_TRANSLATE_NOOP(
         "App::Property", "How far a point of the workpiece surface may be off because of the calibration")),
-    ("App::PropertyAngle", "RotationBound", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyAngle", "Rotation", "Uncertainty", QT_TRANSLATE_NOOP(
         "App::Property", "How far W's rotation may be off")),
     ("App::PropertyStringList", "Reasons", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "Why the calibration is not ok (failed checks, another pose that fits)")),
     ("App::PropertyStringList", "Warnings", "Result", QT_TRANSLATE_NOOP("App::Property", "Warnings of the calibration")),
-    ("App::PropertyFloat", "ComputeTime", "Result", QT_TRANSLATE_NOOP(
+    ("App::PropertyFloat", "Seconds", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "Seconds the calibration took")),
     ("App::PropertyBool", "Accepted", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "Someone checked this result and accepted W (cleared when it is calibrated again)")),
@@ -137,12 +138,12 @@ def result_of(obj) -> CalibrationResult:
 
 def toolpath_source(obj):
     """The toolpath a calibration reports its uncertainty at: its Job/Path object, file, or None."""
-    return obj.Toolpath if obj.Toolpath is not None else (obj.ToolpathFile or None)
+    return obj.Toolpath if obj.Toolpath is not None else (obj.GcodeFile or None)
 
 
 def inputs_of(obj) -> fc_inputs.Inputs:
     """The inputs as the object's links and options say."""
-    options = fc_inputs.options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Resamples)
+    options = fc_inputs.options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Refits)
     return fc_inputs.gather_inputs(obj.Scan, obj.Workpiece, obj.Reference, options=options, regions=obj.Regions,
                                    toolpath=toolpath_source(obj))
 
@@ -190,15 +191,15 @@ def store_result(obj, result: CalibrationResult, key: str = "") -> None:
         setattr(obj, name, placement(np.eye(4) if T is None else T))
     obj.EulerZYZ = "" if result.W is None else euler_text(result.W)
     obj.Omega = 0.0 if result.W is None else frames.omega(result.W)
-    obj.WorkpieceRMS = _finite(getattr(result.workpiece, "rms_mm", None))
-    obj.ReferenceRMS = _finite(getattr(result.reference, "rms_mm", None))
+    obj.PartRMS = _finite(getattr(result.workpiece, "rms_mm", None))
+    obj.RefRMS = _finite(getattr(result.reference, "rms_mm", None))
     u = result.uncertainty or {}
-    obj.ToolpathBound = _finite(u.get("toolpath_bound_mm"))
-    obj.SurfaceBound = _finite(u.get("surface_bound_mm"))
-    obj.RotationBound = _finite(u.get("rotation_bound_deg"))
+    obj.AtToolpath = _finite(u.get("toolpath_bound_mm"))
+    obj.AtSurface = _finite(u.get("surface_bound_mm"))
+    obj.Rotation = _finite(u.get("rotation_bound_deg"))
     obj.Warnings = [str(w) for w in result.warnings]
     obj.Reasons = [str(r) for r in result.reasons]
-    obj.ComputeTime = _finite(result.time_s)
+    obj.Seconds = _finite(result.time_s)
     obj.Accepted = False
     _update_shape(obj, result)
 
@@ -229,7 +230,7 @@ def _update_shape(obj, result: CalibrationResult) -> None:
 
     size = obj.FrameSize.Value or DEFAULT_FRAME_MM
     edges = []
-    if obj.ShowFrames:
+    if obj.Frames:
         for T in frame_poses(result).values():
             origin = FreeCAD.Vector(*T[:3, 3])
             edges += [Part.LineSegment(origin, FreeCAD.Vector(*(T[:3, 3] + size * T[:3, axis]))).toShape()
@@ -241,10 +242,38 @@ def _update_shape(obj, result: CalibrationResult) -> None:
     obj.Placement = pl
 
 
+# Files saved by WorkCal 0.1: properties renamed since (old -> new) and properties no longer kept.
+RENAMED = {"ShowFrames": "Frames", "ToolpathFile": "GcodeFile", "Resamples": "Refits", "ComputeTime": "Seconds",
+           "WorkpieceRMS": "PartRMS", "ReferenceRMS": "RefRMS", "ToolpathBound": "AtToolpath",
+           "SurfaceBound": "AtSurface", "RotationBound": "Rotation"}
+DROPPED = [f"{n}{p}" for n in "WUV" for p in ("Matrix", "EulerZYZ", "Omega", "Translation")] + [
+    "WorkpieceHausdorff", "WorkpieceWithinTolerance", "ReferenceHausdorff", "ReferenceWithinTolerance",
+    "ModelDiagonal"]
+
+
+def _migrate(obj) -> None:
+    """Bring a calibration saved by WorkCal 0.1 to today's properties, values kept (its status was text)."""
+    values = {new: obj.getPropertyByName(old) for old, new in RENAMED.items() if old in obj.PropertiesList}
+    status = obj.Status if obj.getTypeIdOfProperty("Status") == "App::PropertyString" else None
+    for name in list(RENAMED) + DROPPED + (["Status"] if status is not None else []):
+        if name in obj.PropertiesList:
+            obj.removeProperty(name)
+    add_properties(obj, INPUT_PROPERTIES + OPTION_PROPERTIES + RESULT_PROPERTIES + HIDDEN_PROPERTIES)
+    for name, value in values.items():
+        setattr(obj, name, value)
+    if status is not None:
+        obj.Status = STATUSES
+        obj.Status = status if status in STATUSES else "error"
+
+
 class CalibrationFeature(Feature):
     """Proxy of the calibration object (``Part::FeaturePython``)."""
 
     TYPE = TYPE
+
+    def onDocumentRestored(self, obj):
+        _migrate(obj)
+        super().onDocumentRestored(obj)
 
     def setup(self, obj) -> None:
         add_properties(obj, INPUT_PROPERTIES + OPTION_PROPERTIES + RESULT_PROPERTIES + HIDDEN_PROPERTIES,
@@ -261,8 +290,8 @@ class CalibrationFeature(Feature):
             obj.Status = "new"
         if obj.Tolerance.Value == 0:
             obj.Tolerance = prefs.get("ToleranceMm")
-        if obj.Resamples == 0:
-            obj.Resamples = prefs.get("Resamples")
+        if obj.Refits == 0:
+            obj.Refits = prefs.get("Resamples")
 
     def execute(self, obj):
         prepared = self.__dict__.pop("_prepared", None)  # (key, result) just computed by make/update
@@ -292,11 +321,11 @@ def _set_options(obj, options, regions: str, toolpath) -> None:
     obj.Method = options.method
     obj.Tolerance = options.tolerance_mm
     obj.Seed = options.seed
-    obj.Resamples = options.resamples
+    obj.Refits = options.resamples
     obj.Regions = regions
     is_file = isinstance(toolpath, (str, os.PathLike))
     obj.Toolpath = None if (toolpath is None or is_file) else toolpath
-    obj.ToolpathFile = os.fspath(toolpath) if is_file else ""
+    obj.GcodeFile = os.fspath(toolpath) if is_file else ""
 
 
 UNSET = object()
@@ -332,7 +361,7 @@ def make_calibration(doc, scan=None, workpiece=None, reference=None, *, toleranc
         obj.Scan, obj.Workpiece, obj.Reference = scan, workpiece, reference
         _set_options(obj, options, regions, toolpath)
         obj.FrameSize = FRAME_FRACTION * inputs.workpiece.diagonal() or DEFAULT_FRAME_MM
-        obj.ShowFrames = True
+        obj.Frames = True
         obj.Proxy._prepared = (inputs.key(), result)
         obj.recompute()
         if overlays:
@@ -350,7 +379,7 @@ def update_calibration(obj, *, tolerance_mm=None, method=None, seed=None, resamp
     doc = obj.Document
     options = fc_inputs.options_from(obj.Tolerance.Value if tolerance_mm is None else tolerance_mm,
                                      method or obj.Method, obj.Seed if seed is None else seed,
-                                     obj.Resamples if resamples is None else resamples)
+                                     obj.Refits if resamples is None else resamples)
     regions = regions or obj.Regions
     inputs = fc_inputs.gather_inputs(obj.Scan, obj.Workpiece, obj.Reference, options=options, regions=regions,
                                      toolpath=toolpath_source(obj))

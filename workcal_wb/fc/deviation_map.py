@@ -3,7 +3,7 @@
 Where the clay was changed (a lump added, a groove carved) the scan leaves the model surface.  The
 colours are ``core.deviation.DeviationScale``'s, read against the calibration's tolerance (green
 within it, yellow to red for material added, cyan to blue for material removed, full colour at
-``ColourLimit``, grey where no model surface is near) and the same as in the report.  The GUI draws
+``Limit``, grey where no model surface is near) and the same as in the report.  The GUI draws
 a legend of that scale while the map is shown.
 
 The map is a ``Points::FeaturePython`` linked to its calibration: it recomputes when the calibration
@@ -29,8 +29,8 @@ PROPERTIES = [
     ("App::PropertyLink", "Calibration", "Deviation", QT_TRANSLATE_NOOP(
         "App::Property", "The calibration whose workpiece match is shown")),
     ("App::PropertyBool", "AutoLimit", "Deviation", QT_TRANSLATE_NOOP(
-        "App::Property", "The colours reach full strength at 3 tolerances (set ColourLimit to choose another limit)")),
-    ("App::PropertyLength", "ColourLimit", "Deviation", QT_TRANSLATE_NOOP(
+        "App::Property", "The colours reach full strength at 3 tolerances (set Limit to choose another limit)")),
+    ("App::PropertyLength", "Limit", "Deviation", QT_TRANSLATE_NOOP(
         "App::Property", "Deviation at which the colours reach full red (added) and blue (removed)")),
     ("App::PropertyLength", "Tolerance", "Deviation", QT_TRANSLATE_NOOP(
         "App::Property", "Points within this distance of the model are green (the calibration's tolerance)")),
@@ -40,17 +40,17 @@ PROPERTIES = [
         "App::Property", "Largest deviation into the model (material removed)")),
     ("App::PropertyDistance", "Max", "Statistics", QT_TRANSLATE_NOOP(
         "App::Property", "Largest deviation out of the model (material added)")),
-    ("App::PropertyFloat", "WithinTolerance", "Statistics", QT_TRANSLATE_NOOP(
+    ("App::PropertyFloat", "Within", "Statistics", QT_TRANSLATE_NOOP(
         "App::Property", "% of points within the tolerance")),
     ("App::PropertyInteger", "FarPoints", "Statistics", QT_TRANSLATE_NOOP(
         "App::Property", "Points with no model surface near them (grey)")),
-    ("App::PropertyBool", "ShowLegend", "Display", QT_TRANSLATE_NOOP(
+    ("App::PropertyBool", "Legend", "Display", QT_TRANSLATE_NOOP(
         "App::Property", "Show the colour scale in the 3D view")),
     ("App::PropertyFloatList", "Deviations", "Deviation", QT_TRANSLATE_NOOP(
         "App::Property", "Signed deviation per point, mm (NaN: no surface near)")),
     ("App::PropertyColorList", "Color", "Deviation", QT_TRANSLATE_NOOP("App::Property", "Colour per point")),
 ]
-OUTPUTS = ("Mean", "RMS", "Min", "Max", "WithinTolerance", "FarPoints", "Tolerance", "Calibration")
+OUTPUTS = ("Mean", "RMS", "Min", "Max", "Within", "FarPoints", "Tolerance", "Calibration")
 HIDDEN = ("Deviations", "Color")
 
 
@@ -64,7 +64,7 @@ def deviation_maps(calibration) -> list:
 
 def scale_of(obj) -> DeviationScale:
     """The colour scale of a deviation map: the one its legend shows and its calibration's report uses."""
-    return DeviationScale.for_tolerance(obj.Tolerance.Value, obj.ColourLimit.Value)
+    return DeviationScale.for_tolerance(obj.Tolerance.Value, obj.Limit.Value)
 
 
 def compute(calibration) -> dict:
@@ -81,14 +81,14 @@ class DeviationFeature(Feature):
     TYPE = TYPE
 
     def setup(self, obj):
-        fresh = "ShowLegend" not in obj.PropertiesList
+        fresh = "Legend" not in obj.PropertiesList
         add_properties(obj, PROPERTIES, read_only=OUTPUTS, hidden=HIDDEN)
         if fresh:
-            obj.ShowLegend = True
+            obj.Legend = True
             obj.AutoLimit = True
 
     def onChanged(self, obj, prop):
-        if prop == "ColourLimit" and not getattr(self, "_setting_limit", False) and "AutoLimit" in obj.PropertiesList:
+        if prop == "Limit" and not getattr(self, "_setting_limit", False) and "AutoLimit" in obj.PropertiesList:
             obj.AutoLimit = False  # the user chose a limit: keep it when the tolerance changes
 
     def execute(self, obj):
@@ -102,11 +102,11 @@ class DeviationFeature(Feature):
             FreeCAD.Console.PrintError(f"WorkCal: {obj.Label}: {exc}\n")
             raise
         d, stats, tol = data["deviations"], data["stats"], data["tolerance_mm"]
-        limit = LIMIT_TOLERANCES * tol if obj.AutoLimit else obj.ColourLimit.Value
+        limit = LIMIT_TOLERANCES * tol if obj.AutoLimit else obj.Limit.Value
         scale = DeviationScale.for_tolerance(tol, limit)
         self._setting_limit = True
         try:
-            obj.ColourLimit = scale.limit_mm
+            obj.Limit = scale.limit_mm
         finally:
             self._setting_limit = False
         obj.Tolerance = tol
@@ -117,7 +117,7 @@ class DeviationFeature(Feature):
         obj.RMS = stats.get("rms_mm", 0.0)
         obj.Min = stats.get("min_mm", 0.0)
         obj.Max = stats.get("max_mm", 0.0)
-        obj.WithinTolerance = stats.get("within_tolerance_pct", 0.0)
+        obj.Within = stats.get("within_tolerance_pct", 0.0)
         obj.FarPoints = stats.get("n_far", 0)
 
 
@@ -139,7 +139,7 @@ def make_deviation_map(calibration, *, limit_mm: float | None = None):
         obj.Label = translate("WorkCal", "Deviation map of the workpiece")
         obj.Calibration = calibration
         if limit_mm:
-            obj.ColourLimit = float(limit_mm)  # AutoLimit goes off
+            obj.Limit = float(limit_mm)  # AutoLimit goes off
         obj.recompute()
         if obj.isValid() is False or not obj.Deviations:
             raise InputError(f"{calibration.Label}: the deviation map could not be computed (see the Report view)")
@@ -151,5 +151,5 @@ def make_deviation_map(calibration, *, limit_mm: float | None = None):
 def describe(obj) -> str:
     return (f"WorkCal: {obj.Label}: {len(obj.Deviations)} points, mean {obj.Mean.Value:+.3f} mm, "
             f"RMS {obj.RMS.Value:.3f} mm, min {obj.Min.Value:+.3f} mm, max {obj.Max.Value:+.3f} mm, "
-            f"{obj.WithinTolerance:.1f}% within {obj.Tolerance.Value:g} mm, {obj.FarPoints} far from the model; "
-            f"full colour at +-{obj.ColourLimit.Value:g} mm")
+            f"{obj.Within:.1f}% within {obj.Tolerance.Value:g} mm, {obj.FarPoints} far from the model; "
+            f"full colour at +-{obj.Limit.Value:g} mm")

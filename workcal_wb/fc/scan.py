@@ -46,8 +46,11 @@ TYPE = "WorkCal::Scan"
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 REGION_SOURCES = ["none", "user", "auto"]
 # Region properties, also added to foreign Points/Mesh objects used as scans.
-WORKPIECE_PROP, REFERENCE_PROP, SOURCE_PROP = "WorkpieceRegion", "ReferenceRegion", "RegionSource"
-WORKPIECE_COUNT_PROP, REFERENCE_COUNT_PROP = "WorkpiecePoints", "ReferencePoints"
+WORKPIECE_PROP, REFERENCE_PROP, SOURCE_PROP = "WorkpieceRegion", "ReferenceRegion", "Source"
+# Shown in the property editor: short names (they must fit its first column), the group says "Regions".
+WORKPIECE_COUNT_PROP, REFERENCE_COUNT_PROP = "Workpiece", "Reference"
+# What WorkCal 0.1 called the shown ones (scans it saved are brought up to date when reopened).
+OLD_REGION_PROPS = {"RegionSource": SOURCE_PROP, "WorkpiecePoints": None, "ReferencePoints": None}
 REGION_GROUP = "Regions"
 # Files read by FreeCAD's Points module instead of workcal_wb.core.readers.
 FREECAD_POINT_FORMATS = (".e57",)
@@ -77,7 +80,17 @@ class ScanFeature(Feature):
 
     def onDocumentRestored(self, obj):
         self._cloud = None
+        source = obj.RegionSource if "RegionSource" in obj.PropertiesList else None
+        for name in OLD_REGION_PROPS:
+            if name in obj.PropertiesList:
+                obj.removeProperty(name)
         super().onDocumentRestored(obj)
+        if source in ("user", "auto"):
+            try:
+                set_regions(obj, getattr(obj, WORKPIECE_PROP), getattr(obj, REFERENCE_PROP), source=source)
+            except InputError:  # stale regions: said when they are used
+                pass
+            obj.purgeTouched()
 
 
 def is_scan(obj) -> bool:
@@ -181,21 +194,24 @@ def _normals(obj, count: int):
 
 # --- regions -------------------------------------------------------------------------------------
 
+REGION_PROPERTIES = [
+    ("App::PropertyIntegerList", WORKPIECE_PROP, "Indices of the scan points on the workpiece"),
+    ("App::PropertyIntegerList", REFERENCE_PROP, "Indices of the scan points on the reference object"),
+    ("App::PropertyEnumeration", SOURCE_PROP, "Who set the regions: picked by the user (user) or found "
+                                              "automatically (auto)"),
+    ("App::PropertyInteger", WORKPIECE_COUNT_PROP, "Number of points in the workpiece region"),
+    ("App::PropertyInteger", REFERENCE_COUNT_PROP, "Number of points in the reference region"),
+]
+
+
 def _add_region_properties(obj) -> None:
-    if hasattr(obj, SOURCE_PROP):
-        return
-    obj.addProperty("App::PropertyIntegerList", WORKPIECE_PROP, REGION_GROUP,
-                    "Indices of the scan points on the workpiece")
-    obj.addProperty("App::PropertyIntegerList", REFERENCE_PROP, REGION_GROUP,
-                    "Indices of the scan points on the reference object")
-    obj.addProperty("App::PropertyEnumeration", SOURCE_PROP, REGION_GROUP,
-                    "Who set the regions: picked by the user or found automatically", 0, True)
-    setattr(obj, SOURCE_PROP, REGION_SOURCES)
-    obj.addProperty("App::PropertyInteger", WORKPIECE_COUNT_PROP, REGION_GROUP,
-                    "Number of points in the workpiece region", 0, True)
-    obj.addProperty("App::PropertyInteger", REFERENCE_COUNT_PROP, REGION_GROUP,
-                    "Number of points in the reference region", 0, True)
-    # Long index lists are unreadable in the property editor; the counts above stand for them.
+    for kind, name, tip in REGION_PROPERTIES:
+        if name not in obj.PropertiesList:
+            read_only = name not in (WORKPIECE_PROP, REFERENCE_PROP)
+            obj.addProperty(kind, name, REGION_GROUP, tip, 0, read_only)
+            if name == SOURCE_PROP:
+                setattr(obj, SOURCE_PROP, REGION_SOURCES)
+    # Long index lists are unreadable in the property editor; the counts stand for them.
     obj.setEditorMode(WORKPIECE_PROP, 2)
     obj.setEditorMode(REFERENCE_PROP, 2)
 

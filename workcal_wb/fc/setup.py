@@ -40,7 +40,7 @@ PROPERTY_LIST = [
     ("App::PropertyLink", "Toolpath", "WorkCal", QT_TRANSLATE_NOOP("App::Property", "The toolpath to carry into the "
                                                                                   "robot frame: a Path/CAM Job or "
                                                                                   "operation")),
-    ("App::PropertyFile", "ToolpathFile", "WorkCal", QT_TRANSLATE_NOOP("App::Property", "The toolpath as a G-code "
+    ("App::PropertyFile", "GcodeFile", "WorkCal", QT_TRANSLATE_NOOP("App::Property", "The toolpath as a G-code "
                                                                                       "file (used when Toolpath is "
                                                                                       "empty)")),
 ]
@@ -131,8 +131,8 @@ def toolpath_of(doc):
     obj = setup_object(doc) if doc is not None else None
     if obj is not None and obj.Toolpath is not None:
         return obj.Toolpath
-    if obj is not None and obj.ToolpathFile:
-        return obj.ToolpathFile
+    if obj is not None and obj.GcodeFile:
+        return obj.GcodeFile
     found = jobs(doc) if doc is not None else []
     return found[0] if len(found) == 1 else None
 
@@ -151,5 +151,5 @@ def choose_toolpath(doc, source):
         obj = setup_object(doc, create=True)
         is_file = isinstance(source, (str, os.PathLike))
         obj.Toolpath = None if is_file else source
-        obj.ToolpathFile = os.path.abspath(os.fspath(source)) if is_file else ""
+        obj.GcodeFile = os.path.abspath(os.fspath(source)) if is_file else ""
     return obj

@@ -32,7 +32,7 @@ class ViewProviderCalibration(ViewProvider):
         self._update_labels(vobj.Object)
 
     def updateData(self, obj, prop):
-        if prop in ("Shape", "ResultJson", "ShowFrames"):
+        if prop in ("Shape", "ResultJson", "Frames"):
             self._update_labels(obj)
             self._colour_edges(obj)
 
@@ -53,7 +53,7 @@ class ViewProviderCalibration(ViewProvider):
         if vobj is not None:
             self.switch.whichChild = 0 if vobj.Visibility else -1
         self.labels.removeAllChildren()
-        if not getattr(obj, "ShowFrames", False) or not getattr(obj, "ResultJson", ""):
+        if not getattr(obj, "Frames", False) or not getattr(obj, "ResultJson", ""):
             return
         try:
             result = result_of(obj)

@@ -118,7 +118,7 @@ class ViewProviderDeviationMap(ViewProvider):
         self._rebuild(vobj.Object)
 
     def updateData(self, obj, prop):
-        if prop in ("ColourLimit", "Tolerance", "ShowLegend", "Color"):
+        if prop in ("Limit", "Tolerance", "Legend", "Color"):
             self._rebuild(obj)
 
     def onChanged(self, vobj, prop):
@@ -129,7 +129,7 @@ class ViewProviderDeviationMap(ViewProvider):
         if not hasattr(self, "switch"):
             return
         vobj = getattr(obj, "ViewObject", None)
-        visible = bool(getattr(obj, "ShowLegend", True)) and vobj is not None and vobj.Visibility
+        visible = bool(getattr(obj, "Legend", True)) and vobj is not None and vobj.Visibility
         self.switch.whichChild = 0 if visible and self.legend.getNumChildren() else -1
 
     def _rebuild(self, obj):
@@ -138,7 +138,7 @@ class ViewProviderDeviationMap(ViewProvider):
         from workcal_wb.core.errors import WorkCalError
         from workcal_wb.fc.deviation_map import scale_of
 
-        if not hasattr(self, "legend") or "ColourLimit" not in obj.PropertiesList:
+        if not hasattr(self, "legend") or "Limit" not in obj.PropertiesList:
             return
         self.legend.removeAllChildren()
         try:

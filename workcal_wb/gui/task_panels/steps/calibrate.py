@@ -113,7 +113,7 @@ class CalibrateStep(Step):
         if calibration.Status == "error":
             return ATTENTION, translate("WorkCal", "Could not calibrate: {}").format(
                 calibration.Reasons[0] if calibration.Reasons else "")
-        return DONE, translate("WorkCal", "Calibrated in {:.1f} s").format(calibration.ComputeTime)
+        return DONE, translate("WorkCal", "Calibrated in {:.1f} s").format(calibration.Seconds)
 
     def refresh(self) -> None:
         if self.state_name in ("running", "cancelling"):
@@ -126,7 +126,7 @@ class CalibrateStep(Step):
             self.tolerance.setValue(calibration.Tolerance.Value)
             self.method.setCurrentIndex(list(METHODS).index(calibration.Method))
             self.seed.setValue(calibration.Seed)
-            self.resamples.setValue(calibration.Resamples)
+            self.resamples.setValue(calibration.Refits)
             picked = calibration.Regions == "Picked"
         else:
             self.tolerance.setValue(prefs.get("ToleranceMm"))

@@ -55,10 +55,26 @@ class RegionsStep(Step):
         if found.get("stale"):
             return TODO, translate("WorkCal", "The regions no longer fit the scan: find or pick them again")
         if found.get("workpiece") is None and found.get("reference") is None:
+            used = self._calibration_regions()
+            if used:
+                return DONE, translate("WorkCal", "found by the calibration: workpiece {} points, reference {}").format(
+                    *(len(used.get(r) or []) for r in ("workpiece", "reference")))
             return TODO, translate("WorkCal", "Find the workpiece and the reference object in the scan")
         how = translate("WorkCal", "found") if found.get("source") == "auto" else translate("WorkCal", "picked")
         return DONE, translate("WorkCal", "{}: workpiece {} points, reference {}").format(
             how, *(0 if found.get(r) is None else len(found[r]) for r in ("workpiece", "reference")))
+
+    def _calibration_regions(self) -> dict:
+        """The regions the latest calibration found for itself (automatic regions), or {}."""
+        from workcal_wb.fc.calibration_object import result_of
+
+        calibration = self.guide.calibration()
+        if calibration is None or not calibration.ResultJson:
+            return {}
+        try:
+            return result_of(calibration).regions or {}
+        except WorkCalError:
+            return {}
 
     def refresh(self) -> None:
         self.counts.setText(self.state()[1])
