@@ -117,6 +117,13 @@ def record_macro(folder):
     assert started, "the macro recorder did not start"
 
 
+def stop_recording():
+    """Macro > Stop macro recording: its own command on FreeCAD 0.20; on 1.x the record command toggles."""
+    stop = "Std_MacroStopRecord" if "Std_MacroStopRecord" in FreeCADGui.listCommands() else "Std_DlgMacroRecord"
+    FreeCADGui.runCommand(stop)
+    pump(0.1)
+
+
 def test_01_scan(step, shoot_window, check_page, scan_share):
     from workcal_wb.gui.commands.guide import open_guide
 
@@ -333,8 +340,7 @@ def test_08_export_with_the_machine_profile(step, shoot_window, check_page):
     assert page.export() is not None and (step["dir"] / "part.src").exists()
     check_page(panel, "export")
     shoot_window("08_export")
-    FreeCADGui.runCommand("Std_MacroStopRecord")
-    pump(0.1)
+    stop_recording()
 
 
 def test_09_the_recorded_macro_replays_headless(step, output_dir):

@@ -105,25 +105,42 @@ def box_corners(box: np.ndarray) -> np.ndarray:
     return np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
-def text_image(text: str, pixels: int = LABEL_PIXELS):
-    """A label as a QImage: the text in the application's font on a light rounded box (legible over any
-    scene), transparent around it."""
-    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+def boxed_canvas(width: int, height: int, font, inset: int = 0, radius: float = 4, fill_alpha: int = 225):
+    """A transparent RGBA image with a light rounded box drawn in it (``inset`` pixels from its edges), and
+    a painter on it in ``font`` (the caller draws on, then calls ``painter.end()``): what overlays of the
+    3D view are drawn on, so they read over any scene."""
+    from workcal_wb.gui.task_panels import QtCore, QtGui
 
-    font = QtGui.QFont(QtWidgets.QApplication.font())
-    font.setPixelSize(pixels)
-    metrics = QtGui.QFontMetrics(font)
-    width = metrics.boundingRect(text).width() + 2 * LABEL_PADDING + 2
-    height = metrics.height() + LABEL_PADDING + 2
     image = QtGui.QImage(width, height, QtGui.QImage.Format_RGBA8888)
     image.fill(QtGui.QColor(0, 0, 0, 0))
     painter = QtGui.QPainter(image)
     painter.setRenderHint(QtGui.QPainter.Antialiasing, True)
     painter.setFont(font)
-    painter.setPen(QtGui.QColor(110, 110, 110))
-    painter.setBrush(QtGui.QColor(255, 255, 255, 225))
-    painter.drawRoundedRect(QtCore.QRectF(0.5, 0.5, width - 1, height - 1), 4, 4)
+    painter.setPen(QtGui.QColor(100, 100, 100))
+    painter.setBrush(QtGui.QColor(255, 255, 255, fill_alpha))
+    painter.drawRoundedRect(QtCore.QRectF(inset + 0.5, inset + 0.5, width - 2 * inset - 1, height - 2 * inset - 1),
+                            radius, radius)
     painter.setPen(QtGui.QColor(*[int(255 * c) for c in LABEL_COLOUR]))
+    return image, painter
+
+
+def overlay_font(pixels: int):
+    """The application's font at a size in pixels (crisp at any screen scale)."""
+    from workcal_wb.gui.task_panels import QtGui, QtWidgets
+
+    font = QtGui.QFont(QtWidgets.QApplication.font())
+    font.setPixelSize(pixels)
+    return font
+
+
+def text_image(text: str, pixels: int = LABEL_PIXELS):
+    """A label as a QImage: the text in the application's font on a light rounded box."""
+    from workcal_wb.gui.task_panels import QtGui
+
+    font = overlay_font(pixels)
+    metrics = QtGui.QFontMetrics(font)
+    width = metrics.boundingRect(text).width() + 2 * LABEL_PADDING + 2
+    image, painter = boxed_canvas(width, metrics.height() + LABEL_PADDING + 2, font)
     painter.drawText(LABEL_PADDING + 1, LABEL_PADDING // 2 + 1 + metrics.ascent(), text)
     painter.end()
     return image

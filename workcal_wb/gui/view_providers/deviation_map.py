@@ -12,7 +12,7 @@ import numpy as np
 
 import FreeCAD
 
-from workcal_wb.gui.view import image_node, navigation_cube_rect
+from workcal_wb.gui.view import boxed_canvas, image_node, navigation_cube_rect, overlay_font
 from workcal_wb.gui.view_providers.base import ViewProvider
 
 translate = FreeCAD.Qt.translate
@@ -36,11 +36,10 @@ def legend_lines(scale) -> dict:
 
 def legend_image(scale):
     """The legend as a QImage (RGBA, transparent margin) and the font it was written in."""
-    from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+    from workcal_wb.gui.task_panels import QtCore, QtGui
 
     words = legend_lines(scale)
-    font = QtGui.QFont(QtWidgets.QApplication.font())
-    font.setPixelSize(FONT_PIXELS)
+    font = overlay_font(FONT_PIXELS)
     metrics = QtGui.QFontMetrics(font)
     line = metrics.height()
     text_width = max(metrics.boundingRect(t).width() for t in words["title"] + words["notes"])
@@ -48,16 +47,8 @@ def legend_image(scale):
     width = 2 * (MARGIN + PADDING) + max(text_width, BAR_WIDTH + 8 + tick_width)
     bar_top = MARGIN + PADDING + 2 * line + 6 + BEYOND_PIXELS
     height = bar_top + BAR_HEIGHT + BEYOND_PIXELS + 6 + 3 * line + PADDING + MARGIN
-    image = QtGui.QImage(width, height, QtGui.QImage.Format_RGBA8888)
-    image.fill(QtGui.QColor(0, 0, 0, 0))
-    painter = QtGui.QPainter(image)
-    painter.setRenderHint(QtGui.QPainter.Antialiasing, True)
-    painter.setFont(font)
-    painter.setPen(QtGui.QColor(90, 90, 90))
-    painter.setBrush(QtGui.QColor(255, 255, 255, 235))
-    painter.drawRoundedRect(MARGIN, MARGIN, width - 2 * MARGIN - 1, height - 2 * MARGIN - 1, 5, 5)
+    image, painter = boxed_canvas(width, height, font, inset=MARGIN, radius=5, fill_alpha=235)
     x = MARGIN + PADDING
-    painter.setPen(QtGui.QColor(20, 20, 20))
     for i, text in enumerate(words["title"]):
         painter.drawText(x, MARGIN + PADDING + metrics.ascent() + i * line, text)
     rows = np.linspace(scale.limit_mm, -scale.limit_mm, BAR_HEIGHT)  # top row: +limit
