@@ -357,7 +357,7 @@ def make_calibration(doc, scan=None, workpiece=None, reference=None, *, toleranc
     with transaction(doc, translate("WorkCal", "WorkCal calibration")):
         obj = doc.addObject("Part::FeaturePython", name)
         CalibrationFeature(obj)
-        obj.Label = translate("WorkCal", "Calibration")
+        obj.Label = translate("WorkCal", "Calibration") if name == "Calibration" else name
         obj.Scan, obj.Workpiece, obj.Reference = scan, workpiece, reference
         _set_options(obj, options, regions, toolpath)
         obj.FrameSize = FRAME_FRACTION * inputs.workpiece.diagonal() or DEFAULT_FRAME_MM

@@ -19,7 +19,8 @@ from workcal_wb.fc import proxies
 from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
-from workcal_wb.gui.task_panels.steps import STEPS, ATTENTION, DONE, TODO
+from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, STEPS, TODO
+from workcal_wb.gui.task_panels.steps.base import reveal
 
 translate = FreeCAD.Qt.translate
 
@@ -202,6 +203,7 @@ class GuidePanel:
         self.page_title.setText(f"{list(self.steps).index(name) + 1}. {step.HEADING}")
         step.refresh()
         self._show_rows()
+        reveal(self.page_title)
         self.show_scene()
 
     def show_scene(self) -> None:

@@ -54,6 +54,9 @@ class Step:
 
         return get_setup(self.doc)
 
+    def reveal(self, widget) -> None:
+        reveal(widget)
+
     def run_guarded(self, title: str, action):
         """Run ``action()`` as a command runs: errors become messages (Report view and, interactively, a box)."""
         from workcal_wb.gui.task_panels.common import guarded
@@ -61,6 +64,15 @@ class Step:
         result = guarded(title)(action)()
         self.guide.refresh()
         return result
+
+
+def reveal(widget) -> None:
+    """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight."""
+    parent = widget.parentWidget()
+    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+        parent = parent.parentWidget()
+    if parent is not None:
+        QtCore.QTimer.singleShot(0, lambda: parent.ensureWidgetVisible(widget))
 
 
 def label(text: str = "", tip: str = "", name: str = "") -> QtWidgets.QLabel:

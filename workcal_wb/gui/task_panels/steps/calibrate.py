@@ -279,6 +279,8 @@ class CalibrateStep(Step):
         self.last_error = text
         error(translate("WorkCal", "calibration not done: {}").format(text))
         self._show(0.0, translate("WorkCal", "Not calibrated: {}").format(text.splitlines()[0] if text else ""))
+        if self._alive():
+            self.reveal(self.message)
         self.guide.refresh()
 
     def _on_cancelled(self) -> None:

@@ -202,6 +202,7 @@ class ExportStep(Step):
             self.guide.exported = path
             self.written.setText(translate("WorkCal", "Written: {} ({} for the {})").format(
                 path, self.format.currentText(), self.machine.currentText().lower()))
+            self.reveal(self.written)
         self.guide.refresh()
         return job
 
@@ -221,6 +222,7 @@ class ExportStep(Step):
         self.allow_button.setVisible(not refusal.five_axis_path)
         self.allowed = needed
         self.refusal.setVisible(True)
+        self.reveal(self.refusal)
 
     def allow_tilt(self):
         self.tilt.setValue(self.allowed)

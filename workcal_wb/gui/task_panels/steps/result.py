@@ -248,6 +248,7 @@ class ResultStep(Step):
         self.candidate = max(self.candidate + step, 0)
         replay.run("workcal_wb.fc.placed_model.show_candidate", calibration, self.candidate, result="placed_models")
         self.guide.go(self.NAME)
+        self.reveal(self.poses)
 
     # ------------------------------------------------------------------ actions
     def accept(self) -> None:
