@@ -300,7 +300,7 @@
     <message>
         <location filename="../../workcal_wb/fc/calibration_object.py" line="357"/>
         <location filename="../../workcal_wb/fc/calibration_object.py" line="387"/>
-        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="132"/>
+        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="133"/>
         <source>WorkCal calibration</source>
         <translation type="unfinished"></translation>
     </message>
@@ -397,7 +397,7 @@
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/scan.py" line="381"/>
+        <location filename="../../workcal_wb/fc/scan.py" line="379"/>
         <location filename="../../workcal_wb/gui/commands/import_scan.py" line="98"/>
         <location filename="../../workcal_wb/gui/commands/import_scan.py" line="83"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/scan.py" line="65"/>
@@ -762,7 +762,7 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="256"/>
+        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="258"/>
         <source>Next: {}</source>
         <translation type="unfinished"></translation>
     </message>
@@ -925,12 +925,12 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="288"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="290"/>
         <source>calibration cancelled; the document is unchanged</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="289"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="291"/>
         <source>Cancelled: the document is unchanged.</source>
         <translation type="unfinished"></translation>
     </message>
@@ -1071,17 +1071,17 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="211"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="212"/>
         <source>This toolpath tilts the tool {:.2f} deg: a 3-axis machine cannot follow it. Export it for a 5-axis machine.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="214"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="215"/>
         <source>The part sits tilted: W turns the tool {:.3f} deg away from the machine's Z, more than the {:g} deg allowed for a 3-axis machine. Level the part (shim it) and calibrate again, allow {:g} deg if your tool can take it, or export for a 5-axis machine.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="220"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/export.py" line="221"/>
         <source>Allow {:g} deg</source>
         <translation type="unfinished"></translation>
     </message>
@@ -1369,7 +1369,7 @@ Reference: {} points</source>
     </message>
     <message>
         <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="103"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="255"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="256"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="175"/>
         <source>Accept</source>
         <translation type="unfinished"></translation>
@@ -1401,9 +1401,9 @@ Reference: {} points</source>
     </message>
     <message>
         <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="113"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="280"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="277"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="293"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="281"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="278"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="294"/>
         <location filename="../../workcal_wb/gui/view_providers/calibration.py" line="101"/>
         <source>Deviation map</source>
         <translation type="unfinished"></translation>
@@ -1464,22 +1464,22 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="264"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="265"/>
         <source>Calibration report</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="279"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="280"/>
         <source>Show the scan</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="296"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="297"/>
         <source>Workpiece model, placed</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="297"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="298"/>
         <source>Reference model, placed</source>
         <translation type="unfinished"></translation>
     </message>

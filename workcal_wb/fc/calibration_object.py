@@ -133,7 +133,7 @@ def result_of(obj) -> CalibrationResult:
         raise InputError(f"{fc_inputs.label(obj)}: not a WorkCal calibration")
     if not obj.ResultJson:
         raise InputError(f"{obj.Label}: the calibration has not been computed yet")
-    return CalibrationResult.from_dict(json.loads(obj.ResultJson), f"calibration {obj.Label!r}")
+    return CalibrationResult.from_text(obj.ResultJson, f"calibration {obj.Label!r}")
 
 
 def toolpath_source(obj):

@@ -17,7 +17,6 @@ import numpy as np
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
-from workcal_wb.core.match import METHODS
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.fc import prefs
 from workcal_wb.fc.memo import LastResult
@@ -63,17 +62,12 @@ def label(obj) -> str:
 
 
 def options_from(tolerance_mm=None, method=None, seed=None, resamples=None) -> CalibrationOptions:
-    """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors."""
+    """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors
+    (CalibrationOptions checks them)."""
     tolerance_mm = prefs.get("ToleranceMm") if tolerance_mm is None else float(tolerance_mm)
     method = prefs.get("Method") if method is None else str(method)
     seed = prefs.get("Seed") if seed is None else int(seed)
     resamples = prefs.get("Resamples") if resamples is None else int(resamples)
-    if not (np.isfinite(tolerance_mm) and tolerance_mm > 0):
-        raise InputError(f"tolerance must be a positive number of mm, not {tolerance_mm}")
-    if method not in METHODS:
-        raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if resamples < 1:
-        raise InputError(f"resamples must be at least 1, not {resamples}")
     return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples)
 
 
