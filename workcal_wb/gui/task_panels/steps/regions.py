@@ -58,7 +58,7 @@ class RegionsStep(Step):
             used = self._calibration_regions()
             if used:
                 return DONE, translate("WorkCal", "found by the calibration: workpiece {} points, reference {}").format(
-                    *(len(used.get(r) or []) for r in ("workpiece", "reference")))
+                    *(0 if used.get(r) is None else len(used[r]) for r in ("workpiece", "reference")))
             return TODO, translate("WorkCal", "Find the workpiece and the reference object in the scan")
         how = translate("WorkCal", "found") if found.get("source") == "auto" else translate("WorkCal", "picked")
         return DONE, translate("WorkCal", "{}: workpiece {} points, reference {}").format(
