@@ -261,13 +261,13 @@ def test_models_on_the_scan_sit_on_its_points(simulated, document):
 
 def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     from workcal_wb.core.deviation import BEYOND_ADDED, WITHIN
-    from workcal_wb.fc import deviation_map as deviation_view
+    from workcal_wb.fc import deviation_map
 
     scene, scan = simulated
     doc, objs = document
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], seed=SEED)
     before = names(doc)
-    dev = deviation_view.make_deviation_map(cal)
+    dev = deviation_map.make_deviation_map(cal)
     assert names(doc) == sorted(before + [dev.Name])
     d = np.array(dev.Deviations)
     assert len(d) == len(co.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
@@ -297,7 +297,7 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     doc = FreeCAD.openDocument(path)
     try:
         dev = doc.getObject(name)
-        assert isinstance(dev.Proxy, deviation_view.DeviationFeature) and deviation_view.is_deviation_map(dev)
+        assert isinstance(dev.Proxy, deviation_map.DeviationFeature) and deviation_map.is_deviation_map(dev)
         np.testing.assert_array_equal(np.array(dev.Deviations), d)
         np.testing.assert_allclose(np.array(dev.Color), np.array(colours), atol=1 / 255)  # saved as 8-bit RGBA
         assert "Touched" not in dev.State

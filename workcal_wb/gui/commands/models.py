@@ -2,7 +2,7 @@
 
 The command opens the guide at its models step.  ``choose_models`` and ``import_model`` are what that
 step does, as recorded commands (``workcal_wb.fc.setup.choose_models``,
-``workcal_wb.fc.models.import_model_file``): one undo step each, replayable in a macro.
+``workcal_wb.fc.models.import_model``): one undo step each, replayable in a macro.
 """
 from __future__ import annotations
 

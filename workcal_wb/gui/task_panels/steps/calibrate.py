@@ -195,6 +195,7 @@ class CalibrateStep(Step):
             inputs.labels["scan"], inputs.labels["workpiece"], inputs.labels["reference"]))
         self.runner.start()
         self.guide.refresh()
+        self.reveal(self.progress_bar)
         return True
 
     def cancel(self) -> None:
