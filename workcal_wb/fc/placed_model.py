@@ -52,18 +52,30 @@ PROPERTIES = [
 ]
 
 
-def candidate_poses(calibration, role: str) -> list:
-    """The poses a calibration's match of ``role`` found, as 4x4 model -> scan transforms, best first
-    (the calibration's own U or V is the first)."""
+def candidates(calibration, role: str) -> list:
+    """The poses of ``role``'s model the calibration's match could not tell apart, best first, as
+    (4x4 model -> scan transform, the model symmetry that gives it or None): the calibration's own U
+    or V, the rival poses the match found, and the poses the model's symmetries give."""
+    from workcal_wb.core.symmetry import turn
     from workcal_wb.fc.calibration_object import result_of
 
     result = result_of(calibration)
     match = result.workpiece if role == "workpiece" else result.reference
     best = result.U if role == "workpiece" else result.V
-    poses = [] if best is None else [best]
+    if best is None:
+        return []
+    found = [(best, None)]
     for candidate in (getattr(match, "candidates", None) or [])[1:]:
-        poses.append(frames.as_transform(candidate["matrix"], "candidate pose"))
-    return poses
+        found.append((frames.as_transform(candidate["matrix"], "candidate pose"), None))
+    for symmetry in getattr(match, "symmetries", None) or []:
+        angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else 90.0  # 0: any angle, a quarter shows it
+        found.append((best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry))
+    return found
+
+
+def candidate_poses(calibration, role: str) -> list:
+    """The 4x4 model -> scan transforms of ``candidates``, the calibration's own first."""
+    return [T for T, _ in candidates(calibration, role)]
 
 
 def pose(calibration, role: str, frame: str, candidate: int = 0) -> np.ndarray:
@@ -192,28 +204,29 @@ SYMMETRIC_SHARE = 0.95
 
 def tie_breaker(calibration, role: str, candidate: int = 1) -> str:
     """The sentence on what would tell the calibration's pose of ``role`` from its ``candidate``-th rival:
-    where on the model the two differ most, or that no scan can when the model is symmetric under the
-    turn between them."""
+    that no scan can when the model is symmetric under the turn between them, else where on the model
+    the two differ most."""
     from workcal_wb.core.surface import SurfaceModel
     from workcal_wb.fc.calibration_object import result_of
 
-    poses = candidate_poses(calibration, role)
-    if len(poses) <= candidate:
+    found = candidates(calibration, role)
+    if len(found) <= candidate:
         return ""
-    result = result_of(calibration)
     name = translate("WorkCal", "workpiece") if role == "workpiece" else translate("WorkCal", "reference object")
+    symmetric = translate("WorkCal", "The {} model is symmetric ({}): no scan can tell these poses apart; only a "
+                                     "feature that breaks the symmetry (a mark, a fixture) would.")
+    rival, symmetry = found[candidate]
+    if symmetry is not None:
+        return symmetric.format(name, symmetry.get("description", ""))
+    tolerance = result_of(calibration).tolerance_mm
     source = calibration.Workpiece if role == "workpiece" else calibration.Reference
-    cloud = models.model_cloud(source, role=role)
-    surface = SurfaceModel(cloud)
+    surface = SurfaceModel(models.model_cloud(source, role=role))
     points = surface.points
-    turn = frames.invert(poses[0]) @ poses[candidate]  # the rival pose, seen in the best pose's model frame
-    moved = frames.apply(turn, points)
-    distance, idx, found = surface.nearest(moved, 3 * surface.spacing + result.tolerance_mm)
-    onto = found & (np.abs(surface.plane_residuals(moved, idx)) <= result.tolerance_mm)
+    moved = frames.apply(frames.invert(found[0][0]) @ rival, points)  # the rival, in the best pose's model frame
+    _, idx, near = surface.nearest(moved, 3 * surface.spacing + tolerance)
+    onto = near & (np.abs(surface.plane_residuals(moved, idx)) <= tolerance)
     if onto.mean() >= SYMMETRIC_SHARE:
-        return translate("WorkCal", "The {} model is symmetric: turned as the other pose turns it, it covers "
-                                    "itself, so no scan can tell these poses apart; only a feature that breaks "
-                                    "the symmetry (a mark, a fixture) would.").format(name)
+        return symmetric.format(name, translate("WorkCal", "turned as the other pose turns it, it covers itself"))
     apart = np.linalg.norm(moved - points, axis=1)
     telling = points[apart >= np.quantile(apart, 1 - TELLING_SHARE)]
     x, y, z = telling.mean(axis=0)
