@@ -25,6 +25,7 @@ import numpy as np
 import FreeCAD
 
 from workcal_wb.core import frames
+from workcal_wb.core.calibration import CalibrationOptions
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.result import FAILED, OK, CalibrationResult
@@ -69,6 +70,15 @@ OPTION_PROPERTIES = [
         "App::Property", "Random seed of the search and the uncertainty estimate: the same seed gives the same W")),
     ("App::PropertyInteger", "Refits", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Refits of both matches the uncertainty is estimated from (bootstrap)")),
+    ("App::PropertyBool", "UseScanner", "Options", QT_TRANSLATE_NOOP(
+        "App::Property", "Use Scanner as where the scanner stood (else the scan file's position, or none: the "
+                         "views are judged without it)")),
+    ("App::PropertyVectorDistance", "Scanner", "Options", QT_TRANSLATE_NOOP(
+        "App::Property", "Where the scanner stood, the origin of the scanner frame S, in the scan's coordinates "
+                         "(used when UseScanner is on)")),
+    ("App::PropertyVector", "Up", "Options", QT_TRANSLATE_NOOP(
+        "App::Property", "The platform's up direction in the scan's coordinates, the side the objects stand on "
+                         "(0, 0, 0: from the data)")),
     ("App::PropertyBool", "Frames", "Display", QT_TRANSLATE_NOOP(
         "App::Property", "Show the axes of the robot base frame (B), the scanner frame (S) and the workpiece "
                          "frame (X)")),
@@ -141,10 +151,24 @@ def toolpath_source(obj):
     return obj.Toolpath if obj.Toolpath is not None else (obj.GcodeFile or None)
 
 
+def scanner_of(obj):
+    """The scanner position stored on the calibration (x, y, z in mm), or None: from the file or unknown."""
+    return tuple(obj.Scanner) if obj.UseScanner else None
+
+
+def up_of(obj):
+    """The up direction stored on the calibration, or None: from the data."""
+    return tuple(obj.Up) if obj.Up.Length > 0 else None
+
+
+def options_of(obj) -> CalibrationOptions:
+    """The calibration options the object's properties say."""
+    return fc_inputs.options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Refits, scanner_of(obj), up_of(obj))
+
+
 def inputs_of(obj) -> fc_inputs.Inputs:
     """The inputs as the object's links and options say."""
-    options = fc_inputs.options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Refits)
-    return fc_inputs.gather_inputs(obj.Scan, obj.Workpiece, obj.Reference, options=options, regions=obj.Regions,
+    return fc_inputs.gather_inputs(obj.Scan, obj.Workpiece, obj.Reference, options=options_of(obj), regions=obj.Regions,
                                    toolpath=toolpath_source(obj))
 
 
@@ -245,7 +269,8 @@ def _update_shape(obj, result: CalibrationResult) -> None:
 # Files saved by WorkCal 0.1: properties renamed since (old -> new) and properties no longer kept.
 RENAMED = {"ShowFrames": "Frames", "ToolpathFile": "GcodeFile", "Resamples": "Refits", "ComputeTime": "Seconds",
            "WorkpieceRMS": "PartRMS", "ReferenceRMS": "RefRMS", "ToolpathBound": "AtToolpath",
-           "SurfaceBound": "AtSurface", "RotationBound": "Rotation"}
+           "SurfaceBound": "AtSurface", "RotationBound": "Rotation", "ScannerOrigin": "Scanner",
+           "ScannerOriginGiven": "UseScanner"}
 DROPPED = [f"{n}{p}" for n in "WUV" for p in ("Matrix", "EulerZYZ", "Omega", "Translation")] + [
     "WorkpieceHausdorff", "WorkpieceWithinTolerance", "ReferenceHausdorff", "ReferenceWithinTolerance",
     "ModelDiagonal"]
@@ -322,6 +347,9 @@ def _set_options(obj, options, regions: str, toolpath) -> None:
     obj.Tolerance = options.tolerance_mm
     obj.Seed = options.seed
     obj.Refits = options.resamples
+    obj.UseScanner = options.scanner_origin is not None
+    obj.Scanner = FreeCAD.Vector(*(options.scanner_origin or (0.0, 0.0, 0.0)))
+    obj.Up = FreeCAD.Vector(*(options.up or (0.0, 0.0, 0.0)))
     obj.Regions = regions
     is_file = isinstance(toolpath, (str, os.PathLike))
     obj.Toolpath = None if (toolpath is None or is_file) else toolpath
@@ -332,12 +360,13 @@ UNSET = object()
 
 
 def make_calibration(doc, scan=None, workpiece=None, reference=None, *, tolerance_mm=None, method=None, seed=None,
-                     resamples=None, regions: str | None = None, toolpath=UNSET, overlays: bool = False,
-                     progress=None, name: str = "Calibration"):
+                     resamples=None, scanner_origin=None, up=None, regions: str | None = None, toolpath=UNSET,
+                     overlays: bool = False, progress=None, name: str = "Calibration"):
     """Calibrate and add the calibration object to ``doc`` in one undo step; return it.
 
     Inputs not given come from the document's WorkCal setup (``fc.setup``), options not given from
-    the preferences; ``toolpath`` (Job, Path object, G-code path or None) defaults to the setup's.
+    the preferences; ``scanner_origin`` (mm) and ``up``, in the scan's coordinates, are stored on the
+    object (None: from the scan's file or the data); ``toolpath`` (Job, Path object, G-code path or None) defaults to the setup's.
     ``overlays``: also show both models placed on the scan (``fc.placed_model``), in the same step.
     ``progress`` as in core.calibrate.  Bad inputs raise InputError, cancelling raises Cancelled: in
     both cases the document is left as it was.  A calibration whose status is "failed" is still added
@@ -351,7 +380,7 @@ def make_calibration(doc, scan=None, workpiece=None, reference=None, *, toleranc
     reference = reference if reference is not None else setup["reference"]
     toolpath = toolpath_of(doc) if toolpath is UNSET else toolpath
     regions = regions or prefs.get("Regions")
-    options = fc_inputs.options_from(tolerance_mm, method, seed, resamples)
+    options = fc_inputs.options_from(tolerance_mm, method, seed, resamples, scanner_origin, up)
     inputs = fc_inputs.gather_inputs(scan, workpiece, reference, options=options, regions=regions, toolpath=toolpath)
     result = fc_inputs.run(inputs, progress)  # before the document changes: a failure leaves it as it was
     with transaction(doc, translate("WorkCal", "WorkCal calibration")):
@@ -370,16 +399,20 @@ def make_calibration(doc, scan=None, workpiece=None, reference=None, *, toleranc
     return obj
 
 
-def update_calibration(obj, *, tolerance_mm=None, method=None, seed=None, resamples=None, regions: str | None = None,
-                       overlays: bool = False, progress=None) -> CalibrationResult:
-    """Calibrate ``obj`` again with other options (those not given stay), in one undo step; returns
-    the new result.  Bad options or inputs raise InputError and leave the object as it was."""
+def update_calibration(obj, *, tolerance_mm=None, method=None, seed=None, resamples=None, scanner_origin=UNSET,
+                       up=UNSET, regions: str | None = None, overlays: bool = False,
+                       progress=None) -> CalibrationResult:
+    """Calibrate ``obj`` again with other options (those not given stay; ``scanner_origin`` or ``up``
+    None: from the scan's file or the data), in one undo step; returns the new result.  Bad options
+    or inputs raise InputError and leave the object as it was."""
     from workcal_wb.fc import placed_model
 
     doc = obj.Document
     options = fc_inputs.options_from(obj.Tolerance.Value if tolerance_mm is None else tolerance_mm,
                                      method or obj.Method, obj.Seed if seed is None else seed,
-                                     obj.Refits if resamples is None else resamples)
+                                     obj.Refits if resamples is None else resamples,
+                                     scanner_of(obj) if scanner_origin is UNSET else scanner_origin,
+                                     up_of(obj) if up is UNSET else up)
     regions = regions or obj.Regions
     inputs = fc_inputs.gather_inputs(obj.Scan, obj.Workpiece, obj.Reference, options=options, regions=regions,
                                      toolpath=toolpath_source(obj))

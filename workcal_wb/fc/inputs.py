@@ -61,14 +61,18 @@ def label(obj) -> str:
     return getattr(obj, "Label", None) or getattr(obj, "Name", None) or str(obj)
 
 
-def options_from(tolerance_mm=None, method=None, seed=None, resamples=None) -> CalibrationOptions:
+def options_from(tolerance_mm=None, method=None, seed=None, resamples=None, scanner_origin=None,
+                 up=None) -> CalibrationOptions:
     """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors
-    (CalibrationOptions checks them)."""
+    (CalibrationOptions checks them).  ``scanner_origin`` (mm) and ``up``, in the scan's coordinates,
+    are the document's to give when the scan's file does not tell them (None: from the data)."""
     tolerance_mm = prefs.get("ToleranceMm") if tolerance_mm is None else float(tolerance_mm)
     method = prefs.get("Method") if method is None else str(method)
     seed = prefs.get("Seed") if seed is None else int(seed)
     resamples = prefs.get("Resamples") if resamples is None else int(resamples)
-    return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples)
+    return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples,
+                              scanner_origin=None if scanner_origin is None else tuple(scanner_origin),
+                              up=None if up is None else tuple(up))
 
 
 def picked_regions(scan) -> dict:
