@@ -4,148 +4,163 @@
 <context>
     <name>App::Property</name>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="46"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="47"/>
         <location filename="../../workcal_wb/fc/setup.py" line="30"/>
         <source>The scene scan: the workpiece and the reference object seen at once (scanner frame S)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="48"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="49"/>
         <source>The workpiece model in its own frame, the toolpath's (X-A in frame X); a Part, Mesh or Points object</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="51"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="52"/>
         <source>The fixed reference object's model, where it stands in the robot base frame (B-P in B)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="53"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="54"/>
         <source>Optional Path/CAM Job or operation: the uncertainty is reported at its cutting points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="55"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="56"/>
         <source>Optional G-code file (used when Toolpath is empty): the uncertainty is reported at its cutting points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="60"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="61"/>
         <source>How the models are fitted to the scan: robust (default), icp or hausdorff (the paper's two measures)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="63"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="64"/>
         <source>Milling tolerance: residuals and the uncertainty at the toolpath must stay within it</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="65"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="66"/>
         <source>Auto: find the workpiece and the reference in the scan; Picked: use the regions picked on the scan</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="68"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="69"/>
         <source>Random seed of the search and the uncertainty estimate: the same seed gives the same W</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="70"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="71"/>
         <source>Refits of both matches the uncertainty is estimated from (bootstrap)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="72"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="73"/>
+        <source>Use Scanner as where the scanner stood (else the scan file's position, or none: the views are judged without it)</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="76"/>
+        <source>Where the scanner stood, the origin of the scanner frame S, in the scan's coordinates (used when UseScanner is on)</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="79"/>
+        <source>The platform's up direction in the scan's coordinates, the side the objects stand on (0, 0, 0: from the data)</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="82"/>
         <source>Show the axes of the robot base frame (B), the scanner frame (S) and the workpiece frame (X)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="75"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="85"/>
         <source>Length of the frame axes</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="81"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="91"/>
         <source>ok: W can be used; ambiguous: another pose fits almost as well; failed: W must not be used (see Reasons); error: the inputs could not be calibrated</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="84"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="94"/>
         <source>Where the workpiece is in the robot base frame: W = ^B X = V^-1 U, the workpiece frame X in the robot base frame B</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="87"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="97"/>
         <source>W's rotation as the paper's Z-Y-Z Euler angles phi, theta, psi (degrees)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="89"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="99"/>
         <source>W's rotation angle about its principal axis: Omega = acos((trace(R) - 1) / 2)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="91"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="101"/>
         <source>Where the workpiece is in the scan: U = ^S X, the workpiece frame X in the scanner frame S</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="93"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="103"/>
         <source>Where the robot base is in the scan: V = ^S B, the robot base frame B in the scanner frame S (from the reference object)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="96"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="106"/>
         <source>RMS distance of the workpiece's scan points to its model</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="98"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="108"/>
         <source>RMS distance of the reference object's scan points to its model</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="100"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="110"/>
         <source>How far a toolpath point may be off because of the calibration (0 without a toolpath)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="102"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="112"/>
         <source>How far a point of the workpiece surface may be off because of the calibration</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="104"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="114"/>
         <source>How far W's rotation may be off</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="106"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="116"/>
         <source>Why the calibration is not ok (failed checks, another pose that fits)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="108"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="118"/>
         <source>Warnings of the calibration</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="109"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="119"/>
         <source>Seconds the calibration took</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="111"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="121"/>
         <source>Someone checked this result and accepted W (cleared when it is calibrated again)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="115"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="125"/>
         <source>The complete CalibrationResult as JSON (for exporters and reports)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="117"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="127"/>
         <source>Fingerprint of the inputs the result was computed from</source>
         <translation type="unfinished"></translation>
     </message>
@@ -298,19 +313,19 @@
 <context>
     <name>WorkCal</name>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="357"/>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="387"/>
-        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="133"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="386"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="420"/>
+        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="134"/>
         <source>WorkCal calibration</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="360"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="389"/>
         <source>Calibration</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/calibration_object.py" line="405"/>
+        <location filename="../../workcal_wb/fc/calibration_object.py" line="438"/>
         <source>Accept the calibration</source>
         <translation type="unfinished"></translation>
     </message>
@@ -345,35 +360,40 @@
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="159"/>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="171"/>
         <source>Show the models on the scan</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="168"/>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="180"/>
         <location filename="../../workcal_wb/gui/view_providers/calibration.py" line="99"/>
         <source>Show the workpiece model in the robot frame</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="204"/>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="215"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="235"/>
         <source>workpiece</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="204"/>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="215"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/result.py" line="235"/>
         <source>reference object</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="214"/>
-        <source>The {} model is symmetric: turned as the other pose turns it, it covers itself, so no scan can tell these poses apart; only a feature that breaks the symmetry (a mark, a fixture) would.</source>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="216"/>
+        <source>The {} model is symmetric ({}): no scan can tell these poses apart; only a feature that breaks the symmetry (a mark, a fixture) would.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/fc/placed_model.py" line="220"/>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="229"/>
+        <source>turned as the other pose turns it, it covers itself</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/fc/placed_model.py" line="233"/>
         <source>The two poses of the {} differ most around ({:.0f}, {:.0f}, {:.0f}) mm on its model, by up to {:.1f} mm: a scan that sees that part clearly, or a region picked to include it, would tell them apart.</source>
         <translation type="unfinished"></translation>
     </message>
@@ -385,8 +405,8 @@
     </message>
     <message>
         <location filename="../../workcal_wb/fc/regions.py" line="85"/>
-        <location filename="../../workcal_wb/gui/picking.py" line="460"/>
-        <location filename="../../workcal_wb/gui/picking.py" line="448"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="461"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="449"/>
         <source>Pick scan regions</source>
         <translation type="unfinished"></translation>
     </message>
@@ -563,160 +583,160 @@
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="135"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="136"/>
         <source>a selection needs at least 3 corners</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="387"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="388"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/regions.py" line="103"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/regions.py" line="101"/>
         <source>Pick region</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="467"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="468"/>
         <source>Region</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="468"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="469"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/regions.py" line="112"/>
         <source>Workpiece</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="468"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="469"/>
         <source>The points on the workpiece (matched to its model X-A)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="470"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="471"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/regions.py" line="113"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/toolpath.py" line="140"/>
         <source>Reference object</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="470"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="471"/>
         <source>The points on the fixed reference object (matched to its model B-P)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="472"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="473"/>
         <source>Tool</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="473"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="474"/>
         <source>Box</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="473"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="474"/>
         <source>Drag a rectangle</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="474"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="475"/>
         <source>Lasso</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="474"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="475"/>
         <source>Click the corners of a polygon</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="476"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="477"/>
         <source>Mode</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="477"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="478"/>
         <source>Replace</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="477"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="478"/>
         <source>The region becomes what you pick</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="478"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="479"/>
         <source>Add (Shift)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="478"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="479"/>
         <source>Add what you pick to the region</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="479"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="480"/>
         <source>Subtract (Ctrl)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="479"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="480"/>
         <source>Take what you pick out of the region</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="483"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="484"/>
         <source>Visible points only</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="485"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="486"/>
         <source>Take only the points you see, not those hidden behind them (e.g. the platform under the part)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="496"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="497"/>
         <source>Undo pick</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="497"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="498"/>
         <source>Undo the last pick</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="499"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="500"/>
         <source>Clear region</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="500"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="501"/>
         <source>Empty the region chosen above</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="505"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="506"/>
         <source>Box: drag with the left button.  Lasso: click the corners (or drag), then right-click, press Enter or click the first corner.  Shift adds, Ctrl subtracts, Esc drops the shape.  The middle button and the wheel still pan and zoom.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="550"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="551"/>
         <source>Scan: {} ({} points)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="552"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="553"/>
         <source>Workpiece: {} points
 Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/picking.py" line="633"/>
+        <location filename="../../workcal_wb/gui/picking.py" line="634"/>
         <source>WorkCal: regions of {}: workpiece {} points, reference {} points
 </source>
         <translation type="unfinished"></translation>
     </message>
     <message>
         <location filename="../../workcal_wb/gui/progress.py" line="50"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="91"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="145"/>
         <source>Cancel</source>
         <translation type="unfinished"></translation>
     </message>
@@ -732,37 +752,37 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="117"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="145"/>
         <source>no document open</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="141"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="169"/>
         <source>no calibration in the document: run WorkCal &gt; Calibrate first</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="151"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="179"/>
         <source>Calibration not ok</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="152"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="180"/>
         <source>The calibration did not pass its quality gates.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="153"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="181"/>
         <source>Use it anyway? The result is marked FORCED; check the workpiece position by hand before running the program.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="173"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="201"/>
         <source>using a calibration that did not pass its gates (FORCED)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="258"/>
+        <location filename="../../workcal_wb/gui/task_panels/guide.py" line="259"/>
         <source>Next: {}</source>
         <translation type="unfinished"></translation>
     </message>
@@ -773,164 +793,210 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="29"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="90"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="140"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="42"/>
+        <source>auto</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="55"/>
+        <source>{}: give X, Y and Z, or leave all three empty (automatic)</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="60"/>
+        <source>{}: {} is not a number</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="70"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="144"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="199"/>
         <source>Calibrate</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="30"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="71"/>
         <source>Calibrate: find where the workpiece is for the robot</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="31"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="72"/>
         <source>Match the workpiece (U = ^S X) and the reference object (V = ^S B) in the scan and compute W = V^-1 U, the workpiece in the robot base frame</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="46"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="87"/>
         <source>The milling tolerance: the fit of both models and the uncertainty at the toolpath must stay within it</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="48"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="89"/>
         <source>Tolerance</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="50"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="91"/>
         <source>Find the regions itself</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="51"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="92"/>
         <source>Find the workpiece and the reference object in the scan with their models</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="53"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="94"/>
         <source>Use the scan's regions</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="54"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="95"/>
         <source>Use the regions found or picked in the Regions step</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="59"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="100"/>
         <source>Advanced options</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="71"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="112"/>
         <source>How the models are fitted: robust (default) weighs down points off the model; icp and hausdorff are the paper's measures D and H</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="75"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="116"/>
         <source>Seed of the random search and of the uncertainty estimate: the same seed gives the same W</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="79"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="120"/>
         <source>How many times both matches are refitted on resampled points to estimate the uncertainty (bootstrap)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="81"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="122"/>
+        <source>Scanner position</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="122"/>
+        <source>Where the scanner stood when it took the scan, in the scan's coordinates (mm): the origin of the scanner frame S. It tells which side of each object the scan shows. Empty: the position the scan's file gives (PCD VIEWPOINT, E57 pose, PLY comment), else none</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="126"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="135"/>
+        <source>Up direction</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="126"/>
+        <source>Which way is up from the platform, in the scan's coordinates: the side the workpiece and the reference object P stand on (a direction; its length does not matter). Empty: from the data</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="130"/>
         <source>Fitting</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="82"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="131"/>
         <source>Random seed</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="83"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="132"/>
         <source>Refits</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="91"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="133"/>
+        <source>Scanner position (mm)</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="137"/>
+        <source>Empty fields: automatic.</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="145"/>
         <source>Stop the calibration; the document stays as it was</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="106"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="160"/>
         <source>Calibrating...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="109"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="163"/>
         <source>Needs the scan and both models</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="112"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="166"/>
         <source>Find where the workpiece is</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="114"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="168"/>
         <source>Could not calibrate: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="116"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="170"/>
         <source>Calibrated in {:.1f} s</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="139"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="198"/>
         <source>Calibrate again</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="192"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="262"/>
         <source>Calibrating</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="193"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="263"/>
         <source>starting</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="194"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="264"/>
         <source>calibrating {} against {} and {} ...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="204"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="275"/>
         <source>Cancelling...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="271"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="342"/>
         <source>Calibration {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="280"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="351"/>
         <source>calibration not done: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="281"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="352"/>
         <source>Not calibrated: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="290"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="361"/>
         <source>calibration cancelled; the document is unchanged</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="291"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="362"/>
         <source>Cancelled: the document is unchanged.</source>
         <translation type="unfinished"></translation>
     </message>

@@ -183,15 +183,33 @@ def test_04_calibrate(step, shoot_window, check_page, scan_share):
     check_page(panel, "calibrate")
     assert scan_share(step["doc"]) >= 1 / 3
     assert page.auto_regions.isChecked() is False and page.picked_regions.isChecked()  # the regions just found
-    assert not page.advanced.isVisible()  # method, seed, refits: out of the way
+    assert not page.advanced.isVisible()  # method, seed, refits, scanner position, up: out of the way
     page.advanced_toggle.click()
+    assert page.advanced.isVisible() and page.scanner.value() is None and page.up.value() is None  # automatic
+    # Where the scanner stood (the scan is in its frame S) and which way is up (B's z seen from S).
+    page.set_options(scanner_origin=("0", "", ""))
+    assert not page.start() and "Scanner position" in page.last_error and panel.calibration() is None
+    up = tuple(float(v) for v in step["scan_truth"].V[:3, :3] @ np.array([0.0, 0.0, 1.0]))
+    page.set_options(scanner_origin=(0, 0, 0), up=up)
     check_page(panel, "calibrate")
+    shoot_window("04_calibrate_advanced")
     page.advanced_toggle.click()
     assert page.start()
     assert page.cancel_button.isVisible()
     shoot_window("04_calibrating")
+    # The core calibration runs with them.
+    assert page.runner.inputs.options.scanner_origin == (0.0, 0.0, 0.0)
+    assert page.runner.inputs.options.up == pytest.approx(up, abs=1e-6)
     assert page.wait(180) == "done", page.last_error
     assert panel.shown == "result"  # the result step opens by itself and stays open
+    # Stored on the calibration object, read back as the core's options and into the page.
+    cal = panel.calibration()
+    assert cal.UseScanner and tuple(cal.Scanner) == (0.0, 0.0, 0.0) and tuple(cal.Up) == pytest.approx(up, abs=1e-6)
+    options = co.options_of(cal)
+    assert options.scanner_origin == (0.0, 0.0, 0.0) and options.up == pytest.approx(up, abs=1e-6)
+    page.refresh()
+    assert page.scanner.value() == (0.0, 0.0, 0.0) and page.up.value() == pytest.approx(up, abs=1e-5)
+    step["up"] = up
 
 
 def test_05_result(step, shoot_window, check_page, scan_share):
@@ -328,12 +346,22 @@ def test_08_export_with_the_machine_profile(step, shoot_window, check_page):
     assert page.refusal.isVisible() and "tilted" in text and "--" not in text  # no command-line flags
     check_page(panel, "export")
     shoot_window("08_export_refused")
+    expected = frames.apply(matrix_of(step["cal"].W), linearised(read_gcode(str(step["dir"] / "toolpath.nc"))).points())
+    # Allowing the tilt: the vertical tolerance set on the page is the one the exporter checked.
+    page.allow_button.click()
+    assert page.machine_profile() == "3axis" and page.tilt.value() == pytest.approx(page.allowed) and out.exists()
+    header = out.read_text().splitlines()[:30]
+    assert any("machine 3axis" in line for line in header)
+    assert any(f"within the tolerance {page.tilt.value():g} deg" in line for line in header), header
+    np.testing.assert_allclose(read_gcode(out).points(), expected, atol=1e-3)
     page.five_axis_button.click()
     assert page.machine_profile() == "5axis-tcp" and page.rotary.isVisible() and out.exists()
     assert panel.states()["export"][0] == "done"
-    np.testing.assert_allclose(read_gcode(out).points(),
-                               frames.apply(matrix_of(step["cal"].W), linearised(read_gcode(str(step["dir"] / "toolpath.nc"))).points()),
-                               atol=1e-3)
+    header = out.read_text().splitlines()[:30]
+    assert any("machine 5axis-tcp" in line for line in header)
+    letters = page.rotary.currentData().upper()
+    assert any(f"rotary axes {letters[0]} {letters[1]}" in line for line in header), header
+    np.testing.assert_allclose(read_gcode(out).points(), expected, atol=1e-3)
     # A robot program: the machine profile is the robot's, not to be chosen.
     page.set_options(fmt="krl", path=step["dir"] / "part.src")
     assert not page.machine.isEnabled() and page.machine_profile() == "robot"
@@ -354,6 +382,7 @@ def test_09_the_recorded_macro_replays_headless(step, output_dir):
                  "workcal_wb.fc.toolpath.make_calibrated_path", "workcal_wb.fc.toolpath.export_program"):
         assert call in text, f"{call} was not recorded"
     assert "workcal_wb.gui" not in text
+    assert "scanner_origin=(0.0, 0.0, 0.0)" in text and f"up=({step['up'][0]!r}," in text  # the advanced options
     (output_dir / f"{MACRO}.FCMacro").write_text(text, encoding="utf-8")
     result = step["dir"] / "replayed.json"
     script = step["dir"] / "replay.py"

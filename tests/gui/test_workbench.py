@@ -159,6 +159,20 @@ def test_screenshots_of_the_main_window_and_the_3d_view(doc, shoot, output_dir, 
     assert np.allclose(tuple(view.getViewDirection()), isometric, atol=1e-6), "the view kept turning"
     assert np.allclose(np.abs(isometric), 3 ** -0.5, atol=1e-3), "not an isometric view"
     window = FreeCADGui.getMainWindow()
+    # After a task dialog closes, the combo view shows the tree again (FreeCAD 1.x left the Tasks tab in front).
+    from workcal_wb.gui.commands.guide import open_guide
+    from workcal_wb.gui.task_panels.common import combo_view_tabs
+
+    tabs = combo_view_tabs()
+    open_guide(doc)
+    pump(0.2)
+    assert FreeCADGui.Control.activeDialog() and tabs.currentIndex() == 1
+    [close] = [b for box in window.findChildren(QtWidgets.QDialogButtonBox) if box.isVisible()
+               for b in [box.button(QtWidgets.QDialogButtonBox.Close)] if b is not None]
+    close.click()  # as the user closes it
+    pump(0.3)
+    assert not FreeCADGui.Control.activeDialog() and obj.ViewObject.Visibility  # a scan to choose stays in sight
+    assert tabs.currentIndex() == 0 and tabs.tabText(0).replace("&", "") == "Model", tabs.tabText(tabs.currentIndex())
     pump(0.2)
     window_path = output_dir / "main_window.png"
     assert window.grab().save(str(window_path))

@@ -32,6 +32,7 @@ from workcal_wb.fc import scan as fc_scan
 from workcal_wb.fc.placements import container_matrix
 from workcal_wb.gui import region_display, replay
 from workcal_wb.gui.task_panels import OK_CANCEL, QtCore, QtGui, QtWidgets
+from workcal_wb.gui.task_panels.common import close_dialog
 
 translate = FreeCAD.Qt.translate
 
@@ -634,7 +635,7 @@ class PickPanel:
                                                               "reference {} points\n").format(
                 self.obj.Label, *(0 if final[r] is None else len(final[r]) for r in ROLES)))
         region_display.update(self.obj)
-        FreeCADGui.Control.closeDialog()
+        close_dialog()
         self.on_close()
         return True
 
@@ -642,6 +643,6 @@ class PickPanel:
         self.tool.stop()
         self._restore()
         region_display.update(self.obj)
-        FreeCADGui.Control.closeDialog()
+        close_dialog()
         self.on_close()
         return True

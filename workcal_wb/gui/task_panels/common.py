@@ -16,7 +16,7 @@ import FreeCAD
 import workcal_wb
 from workcal_wb.core.errors import Cancelled, WorkCalError
 
-from . import QtWidgets, run_modal
+from . import QtCore, QtWidgets, run_modal
 
 translate = FreeCAD.Qt.translate
 
@@ -109,6 +109,34 @@ def show_panel(make_panel):
     panel = make_panel()
     FreeCADGui.Control.showDialog(panel)
     return panel
+
+
+def close_dialog() -> None:
+    """Close the open task dialog, then show the combo view's Model tab again once FreeCAD has closed
+    it: FreeCAD 1.x leaves the empty Tasks tab in front, with the tree and the properties out of sight."""
+    import FreeCADGui
+
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+    QtCore.QTimer.singleShot(0, show_model_tab)
+
+
+def combo_view_tabs():
+    """The combo view's tab widget (Model, Tasks), or None when the combo view is not shown."""
+    import FreeCADGui
+
+    docks = [d for d in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDockWidget)
+             if d.objectName() == "Combo View"]
+    return docks[0].findChild(QtWidgets.QTabWidget) if docks else None
+
+
+def show_model_tab() -> None:
+    """The combo view's Model tab in front, unless a task dialog is open (its Tasks tab belongs in front)."""
+    import FreeCADGui
+
+    tabs = combo_view_tabs()
+    if tabs is not None and not FreeCADGui.Control.activeDialog():
+        tabs.setCurrentIndex(0)
 
 
 def active_document():

@@ -19,6 +19,7 @@ from workcal_wb.fc import proxies
 from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
+from workcal_wb.gui.task_panels.common import close_dialog
 from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, STEPS, TODO
 from workcal_wb.gui.task_panels.steps.base import reveal
 
@@ -279,16 +280,13 @@ class GuidePanel:
         return self.reject()
 
     def close(self) -> None:
-        import FreeCADGui
-
         if self.closed:
             return
         self.closed = True
         FreeCAD.removeDocumentObserver(self.watcher)
         if self.labels is not None:
             self.labels.remove()
-        if FreeCADGui.Control.activeDialog():
-            FreeCADGui.Control.closeDialog()
+        close_dialog()
         if GuidePanel.current is self:
             GuidePanel.current = None
 

@@ -4,8 +4,8 @@ The inputs are read here (main thread), the calibration runs in a worker (``runn
 and, when it has finished, the recorded ``fc.calibration_object.make_calibration`` (or
 ``update_calibration`` for the calibration already there) adds the result in one undo step, finding
 the worker's result instead of computing it again.  An error or a cancel leaves the document as it
-was.  Options a designer rarely touches (method, seed, refits) sit under "Advanced options", with room
-for more.
+was.  Options a designer rarely touches (method, seed, refits, where the scanner stood, which way is
+up) sit under "Advanced options"; the scanner position and the up direction left empty are automatic.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import traceback
 
 import FreeCAD
 
-from workcal_wb.core.errors import WorkCalError
+from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.match import METHODS
 from workcal_wb.fc import prefs
 from workcal_wb.gui import replay
@@ -22,6 +22,47 @@ from workcal_wb.gui.task_panels import QtCore, QtWidgets
 from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, row
 
 translate = FreeCAD.Qt.translate
+
+KEEP = object()  # set_options: leave the field as it is
+
+
+class VectorField(QtWidgets.QWidget):
+    """Three number fields (X, Y, Z) that may all be left empty, meaning "automatic"."""
+
+    def __init__(self, name: str, what: str, tip: str):
+        super().__init__()
+        self.setObjectName(name)
+        self.what = what
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.edits = []
+        for axis in "XYZ":
+            edit = QtWidgets.QLineEdit()
+            edit.setObjectName(f"{name}_{axis}")
+            edit.setPlaceholderText(translate("WorkCal", "auto"))
+            edit.setToolTip(f"{axis}: {tip}")
+            edit.setMinimumWidth(40)
+            layout.addWidget(edit)
+            self.edits.append(edit)
+        self.setToolTip(tip)
+
+    def value(self):
+        """(x, y, z), or None when all three are empty; InputError names a field that is not a number."""
+        texts = [e.text().strip() for e in self.edits]
+        if not any(texts):
+            return None
+        if not all(texts):
+            raise InputError(translate("WorkCal", "{}: give X, Y and Z, or leave all three empty (automatic)")
+                             .format(self.what))
+        try:
+            return tuple(float(t.replace(",", ".")) for t in texts)
+        except ValueError:
+            raise InputError(translate("WorkCal", "{}: {} is not a number").format(self.what, ", ".join(texts))) \
+                from None
+
+    def set_value(self, value) -> None:
+        for edit, v in zip(self.edits, value if value is not None else ("", "", "")):
+            edit.setText(v if isinstance(v, str) else f"{v:g}")
 
 
 class CalibrateStep(Step):
@@ -78,9 +119,22 @@ class CalibrateStep(Step):
         self.resamples.setRange(1, 100)
         self.resamples.setToolTip(translate("WorkCal", "How many times both matches are refitted on resampled points "
                                                        "to estimate the uncertainty (bootstrap)"))
+        self.scanner = VectorField("WorkCal_scanner_position", translate("WorkCal", "Scanner position"), translate(
+            "WorkCal", "Where the scanner stood when it took the scan, in the scan's coordinates (mm): the origin of "
+                       "the scanner frame S. It tells which side of each object the scan shows. Empty: the "
+                       "position the scan's file gives (PCD VIEWPOINT, E57 pose, PLY comment), else none"))
+        self.up = VectorField("WorkCal_up_direction", translate("WorkCal", "Up direction"), translate(
+            "WorkCal", "Which way is up from the platform, in the scan's coordinates: the side the workpiece and "
+                       "the reference object P stand on (a direction; its length does not matter). Empty: from "
+                       "the data"))
         advanced.addRow(translate("WorkCal", "Fitting"), self.method)
         advanced.addRow(translate("WorkCal", "Random seed"), self.seed)
         advanced.addRow(translate("WorkCal", "Refits"), self.resamples)
+        advanced.addRow(label(translate("WorkCal", "Scanner position (mm)"), self.scanner.toolTip()))
+        advanced.addRow(self.scanner)
+        advanced.addRow(label(translate("WorkCal", "Up direction"), self.up.toolTip()))
+        advanced.addRow(self.up)
+        advanced.addRow(label(translate("WorkCal", "Empty fields: automatic.")))
         self.advanced.setLayout(advanced)
         self.advanced.setVisible(False)
         self.advanced_toggle.toggled.connect(self.advanced.setVisible)
@@ -118,6 +172,7 @@ class CalibrateStep(Step):
     def refresh(self) -> None:
         if self.state_name in ("running", "cancelling"):
             return
+        from workcal_wb.fc.calibration_object import scanner_of, up_of
         from workcal_wb.fc.scan import has_regions
 
         calibration = self.guide.calibration()
@@ -127,20 +182,26 @@ class CalibrateStep(Step):
             self.method.setCurrentIndex(list(METHODS).index(calibration.Method))
             self.seed.setValue(calibration.Seed)
             self.resamples.setValue(calibration.Refits)
+            self.scanner.set_value(scanner_of(calibration))
+            self.up.set_value(up_of(calibration))
             picked = calibration.Regions == "Picked"
         else:
             self.tolerance.setValue(prefs.get("ToleranceMm"))
             self.method.setCurrentIndex(list(METHODS).index(prefs.get("Method")))
             self.seed.setValue(prefs.get("Seed"))
             self.resamples.setValue(prefs.get("Resamples"))
+            self.scanner.set_value(None)
+            self.up.set_value(None)
             picked = scan is not None and has_regions(scan)
         self.picked_regions.setEnabled(scan is not None and has_regions(scan))
         (self.picked_regions if picked and self.picked_regions.isEnabled() else self.auto_regions).setChecked(True)
         self.start_button.setText(translate("WorkCal", "Calibrate again") if calibration is not None
                                   else translate("WorkCal", "Calibrate"))
 
-    def set_options(self, tolerance_mm=None, regions=None, method=None, seed=None, resamples=None) -> None:
-        """Set the page's options as a user would (tests and scripts)."""
+    def set_options(self, tolerance_mm=None, regions=None, method=None, seed=None, resamples=None,
+                    scanner_origin=KEEP, up=KEEP) -> None:
+        """Set the page's options as a user would (tests and scripts); ``scanner_origin`` and ``up``
+        None empty their fields (automatic), text goes into the fields as typed."""
         if tolerance_mm is not None:
             self.tolerance.setValue(float(tolerance_mm))
         if regions is not None:
@@ -151,10 +212,17 @@ class CalibrateStep(Step):
             self.seed.setValue(int(seed))
         if resamples is not None:
             self.resamples.setValue(int(resamples))
+        if scanner_origin is not KEEP:
+            self.scanner.set_value(scanner_origin)
+        if up is not KEEP:
+            self.up.set_value(up)
 
     def options(self) -> dict:
+        """The options as the fc functions take them; InputError for a scanner position or up direction
+        that is not three numbers."""
         return {"tolerance_mm": self.tolerance.value(), "method": self.method.currentText(),
                 "seed": self.seed.value(), "resamples": self.resamples.value(),
+                "scanner_origin": self.scanner.value(), "up": self.up.value(),
                 "regions": "Picked" if self.picked_regions.isChecked() else "Auto"}
 
     # ------------------------------------------------------------------ work
@@ -171,17 +239,19 @@ class CalibrateStep(Step):
 
         if self.busy():
             return False
-        options = self.options()
         setup = self.setup()
         self.toolpath = toolpath_of(self.doc)
         try:
+            options = self.options()
             inputs = fc_inputs.gather_inputs(
                 setup["scan"], setup["workpiece"], setup["reference"], regions=options["regions"],
                 options=fc_inputs.options_from(options["tolerance_mm"], options["method"], options["seed"],
-                                               options["resamples"]), toolpath=self.toolpath)
+                                               options["resamples"], options["scanner_origin"], options["up"]),
+                toolpath=self.toolpath)
         except WorkCalError as exc:
             self._failed(str(exc))
             return False
+        self.started_with = options  # what the recorded call is given when the worker has finished
         self.runner = CalibrationRunner(inputs)
         self.runner.progressed.connect(self._on_progress)
         self.runner.succeeded.connect(self._on_success)
@@ -248,7 +318,7 @@ class CalibrateStep(Step):
             self.status.update(fraction, text)
 
     def _on_success(self, result) -> None:
-        options = self.options()
+        options = self.started_with
         calibration = self.guide.calibration()
         if self.doc.Name not in FreeCAD.listDocuments():  # closed while the worker ran
             self._end("cancelled")

@@ -76,7 +76,9 @@ class ScanStep(Step):
             self.guide.go(self.NAME)
 
     def scene(self) -> Scene:
+        from workcal_wb.gui.commands.models import scan_candidates
+
         scan = self.setup()["scan"]
-        if scan is None:
-            return Scene()
+        if scan is None:  # none chosen yet: the scans there are to choose from stay in sight
+            return Scene(show=scan_candidates(self.doc))
         return Scene(show=[scan], labels=[(translate("WorkCal", "Scan"), scan)], orientation=FROM_SCANNER)
