@@ -191,6 +191,7 @@ def test_04_calibrate(step, shoot_window, check_page, scan_share):
     assert not page.start() and "Scanner position" in page.last_error and panel.calibration() is None
     up = tuple(float(v) for v in step["scan_truth"].V[:3, :3] @ np.array([0.0, 0.0, 1.0]))
     page.set_options(scanner_origin=(0, 0, 0), up=up)
+    assert page.message.text() == ""  # the complaint went with the mended field
     check_page(panel, "calibrate")
     shoot_window("04_calibrate_advanced")
     page.advanced_toggle.click()

@@ -152,6 +152,8 @@ class CalibrateStep(Step):
         self.message = label(name="WorkCalCalibrateStatus")
         layout.addWidget(self.message)
         self.option_widgets = [self.tolerance, self.auto_regions, self.picked_regions, self.advanced]
+        for edit in self.scanner.edits + self.up.edits:  # a field mended: its complaint goes
+            edit.textChanged.connect(lambda text: self._show(None, "") if self.state_name == "failed" else None)
         self._busy(False)
 
     # ------------------------------------------------------------------ state
