@@ -61,7 +61,7 @@
     </message>
     <message>
         <location filename="../../workcal_wb/fc/calibration_object.py" line="76"/>
-        <source>Where the scanner stood, the origin of the scanner frame S, in the scan's coordinates (used when UseScanner is on)</source>
+        <source>Where the scanner stood, the origin of the scanner frame S, in the scan's coordinates (used when ScannerOn is true)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
@@ -810,7 +810,7 @@ Reference: {} points</source>
     <message>
         <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="70"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="144"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="199"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="201"/>
         <source>Calibrate</source>
         <translation type="unfinished"></translation>
     </message>
@@ -926,77 +926,77 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="160"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="162"/>
         <source>Calibrating...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="163"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="165"/>
         <source>Needs the scan and both models</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="166"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="168"/>
         <source>Find where the workpiece is</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="168"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="170"/>
         <source>Could not calibrate: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="170"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="172"/>
         <source>Calibrated in {:.1f} s</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="198"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="200"/>
         <source>Calibrate again</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="262"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="264"/>
         <source>Calibrating</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="263"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="265"/>
         <source>starting</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="264"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="266"/>
         <source>calibrating {} against {} and {} ...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="275"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="277"/>
         <source>Cancelling...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="342"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="344"/>
         <source>Calibration {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="351"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="353"/>
         <source>calibration not done: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="352"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="354"/>
         <source>Not calibrated: {}</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="361"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="363"/>
         <source>calibration cancelled; the document is unchanged</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="362"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/calibrate.py" line="364"/>
         <source>Cancelled: the document is unchanged.</source>
         <translation type="unfinished"></translation>
     </message>
@@ -1319,7 +1319,7 @@ Reference: {} points</source>
     <message>
         <location filename="../../workcal_wb/gui/task_panels/steps/regions.py" line="122"/>
         <location filename="../../workcal_wb/gui/task_panels/steps/scan.py" line="15"/>
-        <location filename="../../workcal_wb/gui/task_panels/steps/scan.py" line="82"/>
+        <location filename="../../workcal_wb/gui/task_panels/steps/scan.py" line="84"/>
         <source>Scan</source>
         <translation type="unfinished"></translation>
     </message>

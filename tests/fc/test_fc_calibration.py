@@ -353,7 +353,7 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     up = tuple(float(v) for v in scan.V[:3, :3] @ np.array([0.0, 0.0, 1.0]))
     obj = co.make_calibration(doc, o["scan"], o["workpiece"], o["reference"], scanner_origin=(0.0, 0.0, 0.0), up=up,
                               resamples=2)
-    assert obj.UseScanner and tuple(obj.Scanner) == (0.0, 0.0, 0.0) and tuple(obj.Up) == pytest.approx(up)
+    assert obj.ScannerOn and tuple(obj.Scanner) == (0.0, 0.0, 0.0) and tuple(obj.Up) == pytest.approx(up)
     options = co.options_of(obj)
     assert options.scanner_origin == (0.0, 0.0, 0.0) and options.up == pytest.approx(up)
     assert co.inputs_of(obj).options == options
@@ -362,7 +362,7 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     co.update_calibration(obj, resamples=2)  # options not given stay
     assert co.options_of(obj).scanner_origin == (0.0, 0.0, 0.0) and co.options_of(obj).up == pytest.approx(up)
     co.update_calibration(obj, scanner_origin=None, up=None, resamples=2)  # None: from the file or the data again
-    assert not obj.UseScanner and obj.Up.Length == 0
+    assert not obj.ScannerOn and obj.Up.Length == 0
     assert co.options_of(obj).scanner_origin is None and co.options_of(obj).up is None
     assert obj.Status == "ok"
     assert_pose(matrix(obj.W), scene.W)

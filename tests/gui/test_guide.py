@@ -205,7 +205,7 @@ def test_04_calibrate(step, shoot_window, check_page, scan_share):
     assert panel.shown == "result"  # the result step opens by itself and stays open
     # Stored on the calibration object, read back as the core's options and into the page.
     cal = panel.calibration()
-    assert cal.UseScanner and tuple(cal.Scanner) == (0.0, 0.0, 0.0) and tuple(cal.Up) == pytest.approx(up, abs=1e-6)
+    assert cal.ScannerOn and tuple(cal.Scanner) == (0.0, 0.0, 0.0) and tuple(cal.Up) == pytest.approx(up, abs=1e-6)
     options = co.options_of(cal)
     assert options.scanner_origin == (0.0, 0.0, 0.0) and options.up == pytest.approx(up, abs=1e-6)
     page.refresh()

@@ -70,12 +70,12 @@ OPTION_PROPERTIES = [
         "App::Property", "Random seed of the search and the uncertainty estimate: the same seed gives the same W")),
     ("App::PropertyInteger", "Refits", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Refits of both matches the uncertainty is estimated from (bootstrap)")),
-    ("App::PropertyBool", "UseScanner", "Options", QT_TRANSLATE_NOOP(
+    ("App::PropertyBool", "ScannerOn", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Use Scanner as where the scanner stood (else the scan file's position, or none: the "
                          "views are judged without it)")),
     ("App::PropertyVectorDistance", "Scanner", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "Where the scanner stood, the origin of the scanner frame S, in the scan's coordinates "
-                         "(used when UseScanner is on)")),
+                         "(used when ScannerOn is true)")),
     ("App::PropertyVector", "Up", "Options", QT_TRANSLATE_NOOP(
         "App::Property", "The platform's up direction in the scan's coordinates, the side the objects stand on "
                          "(0, 0, 0: from the data)")),
@@ -153,7 +153,7 @@ def toolpath_source(obj):
 
 def scanner_of(obj):
     """The scanner position stored on the calibration (x, y, z in mm), or None: from the file or unknown."""
-    return tuple(obj.Scanner) if obj.UseScanner else None
+    return tuple(obj.Scanner) if obj.ScannerOn else None
 
 
 def up_of(obj):
@@ -270,7 +270,7 @@ def _update_shape(obj, result: CalibrationResult) -> None:
 RENAMED = {"ShowFrames": "Frames", "ToolpathFile": "GcodeFile", "Resamples": "Refits", "ComputeTime": "Seconds",
            "WorkpieceRMS": "PartRMS", "ReferenceRMS": "RefRMS", "ToolpathBound": "AtToolpath",
            "SurfaceBound": "AtSurface", "RotationBound": "Rotation", "ScannerOrigin": "Scanner",
-           "ScannerOriginGiven": "UseScanner"}
+           "ScannerOriginGiven": "ScannerOn"}
 DROPPED = [f"{n}{p}" for n in "WUV" for p in ("Matrix", "EulerZYZ", "Omega", "Translation")] + [
     "WorkpieceHausdorff", "WorkpieceWithinTolerance", "ReferenceHausdorff", "ReferenceWithinTolerance",
     "ModelDiagonal"]
@@ -347,7 +347,7 @@ def _set_options(obj, options, regions: str, toolpath) -> None:
     obj.Tolerance = options.tolerance_mm
     obj.Seed = options.seed
     obj.Refits = options.resamples
-    obj.UseScanner = options.scanner_origin is not None
+    obj.ScannerOn = options.scanner_origin is not None
     obj.Scanner = FreeCAD.Vector(*(options.scanner_origin or (0.0, 0.0, 0.0)))
     obj.Up = FreeCAD.Vector(*(options.up or (0.0, 0.0, 0.0)))
     obj.Regions = regions

@@ -75,9 +75,21 @@ def reveal(widget) -> None:
         QtCore.QTimer.singleShot(0, lambda: parent.ensureWidgetVisible(widget))
 
 
+class WrappingLabel(QtWidgets.QLabel):
+    """A QLabel that wraps and asks for the height its text needs at the width it got: layouts inside
+    FreeCAD's task view size a wrapping label from its width hint, so a text that wraps to more lines
+    at the width the label finally gets would be cut off at the bottom."""
+
+    def resizeEvent(self, event):
+        super().resizeEvent(event)
+        needed = self.heightForWidth(self.width())
+        if needed > 0 and needed != self.minimumHeight():
+            self.setMinimumHeight(needed)
+
+
 def label(text: str = "", tip: str = "", name: str = "") -> QtWidgets.QLabel:
-    """A label that wraps: it never widens the panel."""
-    widget = QtWidgets.QLabel(text)
+    """A label that wraps: it never widens the panel, and it is as tall as its text needs."""
+    widget = WrappingLabel(text)
     widget.setWordWrap(True)
     widget.setTextFormat(QtCore.Qt.PlainText)
     if tip:
