@@ -159,20 +159,24 @@ def test_screenshots_of_the_main_window_and_the_3d_view(doc, shoot, output_dir, 
     assert np.allclose(tuple(view.getViewDirection()), isometric, atol=1e-6), "the view kept turning"
     assert np.allclose(np.abs(isometric), 3 ** -0.5, atol=1e-3), "not an isometric view"
     window = FreeCADGui.getMainWindow()
-    # After a task dialog closes, the combo view shows the tree again (FreeCAD 1.x left the Tasks tab in front).
+    # After a task dialog closes, the tree is in front again (FreeCAD 1.x left the Tasks tab in front).
     from workcal_wb.gui.commands.guide import open_guide
-    from workcal_wb.gui.task_panels.common import combo_view_tabs
 
-    tabs = combo_view_tabs()
+    def front_tab():
+        """The tab in front of the Model/Tasks pair: the combo view's (0.20) or the tabbed docks' (1.x)."""
+        texts = lambda bar: [bar.tabText(i).replace("&", "") for i in range(bar.count())]  # noqa: E731
+        [bar] = [b for b in window.findChildren(QtWidgets.QTabBar) if b.isVisible() and {"Model", "Tasks"} <= set(texts(b))]
+        return texts(bar)[bar.currentIndex()]
+
     open_guide(doc)
     pump(0.2)
-    assert FreeCADGui.Control.activeDialog() and tabs.currentIndex() == 1
+    assert FreeCADGui.Control.activeDialog() and front_tab() == "Tasks"
     [close] = [b for box in window.findChildren(QtWidgets.QDialogButtonBox) if box.isVisible()
                for b in [box.button(QtWidgets.QDialogButtonBox.Close)] if b is not None]
     close.click()  # as the user closes it
     pump(0.3)
     assert not FreeCADGui.Control.activeDialog() and obj.ViewObject.Visibility  # a scan to choose stays in sight
-    assert tabs.currentIndex() == 0 and tabs.tabText(0).replace("&", "") == "Model", tabs.tabText(tabs.currentIndex())
+    assert front_tab() == "Model"
     pump(0.2)
     window_path = output_dir / "main_window.png"
     assert window.grab().save(str(window_path))

@@ -112,8 +112,8 @@ def show_panel(make_panel):
 
 
 def close_dialog() -> None:
-    """Close the open task dialog, then show the combo view's Model tab again once FreeCAD has closed
-    it: FreeCAD 1.x leaves the empty Tasks tab in front, with the tree and the properties out of sight."""
+    """Close the open task dialog, then bring the Model tab (tree and properties) to the front again
+    once FreeCAD has closed it: FreeCAD 1.x leaves the empty Tasks tab in front."""
     import FreeCADGui
 
     if FreeCADGui.Control.activeDialog():
@@ -121,22 +121,27 @@ def close_dialog() -> None:
     QtCore.QTimer.singleShot(0, show_model_tab)
 
 
-def combo_view_tabs():
-    """The combo view's tab widget (Model, Tasks), or None when the combo view is not shown."""
+def dock(name: str):
+    """FreeCAD's dock widget of that object name ("Combo View" on 0.20; "Model", "Tasks" on 1.x), or None."""
     import FreeCADGui
 
-    docks = [d for d in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDockWidget)
-             if d.objectName() == "Combo View"]
-    return docks[0].findChild(QtWidgets.QTabWidget) if docks else None
+    docks = [d for d in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDockWidget) if d.objectName() == name]
+    return docks[0] if docks else None
 
 
 def show_model_tab() -> None:
-    """The combo view's Model tab in front, unless a task dialog is open (its Tasks tab belongs in front)."""
+    """The Model tab in front, unless a task dialog is open (the Tasks tab belongs in front then).  FreeCAD
+    0.20 has them as the combo view's tabs; 1.x as two docks tabbed together."""
     import FreeCADGui
 
-    tabs = combo_view_tabs()
-    if tabs is not None and not FreeCADGui.Control.activeDialog():
+    if FreeCADGui.Control.activeDialog():
+        return
+    combo = dock("Combo View")
+    tabs = combo.findChild(QtWidgets.QTabWidget) if combo is not None else None
+    if tabs is not None:
         tabs.setCurrentIndex(0)
+    elif dock("Model") is not None:
+        dock("Model").raise_()
 
 
 def active_document():
