@@ -9,7 +9,8 @@ import pytest
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import Envelope, ExportRefused, FORMATS, Move, Toolpath, export, parse_gcode
+from workcal_wb.core.toolpath import (CalibrationNotOk, Envelope, ExportRefused, FORMATS, Move, ToolTilted, Toolpath, export,
+                                      parse_gcode)
 from workcal_wb.core.toolpath.safety import number
 
 W = frames.rigid(frames.rot_z(90.0), (1000.0, 0.0, 500.0))
@@ -39,6 +40,20 @@ def test_a_calibration_that_is_not_ok_is_refused(status, path, tmp_path):
     assert message.startswith(f"cal.json: calibration status is '{status}'")
     assert "gate rms_mm = 0.8 mm, limit 0.3" in message and "coverage" not in message
     assert "--force" in message
+    assert files(tmp_path) == []
+    # Callers tell the refusal forcing overrides by its type, never by its words (GUI: "Use it anyway?").
+    assert isinstance(err.value, CalibrationNotOk) and err.value.status == status
+
+
+def test_refusals_that_forcing_cannot_help_are_not_calibration_refusals(path, tmp_path):
+    tilted = frames.rigid(frames.rot_x(2.0), (500.0, 0.0, 0.0))
+    with pytest.raises(ToolTilted) as err:
+        export(path, calibration("failed", tilted), "gcode", tmp_path / "p.nc", force=True)
+    assert err.value.tilt_deg == pytest.approx(2.0, abs=1e-6) and err.value.tolerance_deg == pytest.approx(0.05)
+    assert not err.value.five_axis_path and not isinstance(err.value, CalibrationNotOk)
+    with pytest.raises(ExportRefused) as err:
+        export(path, calibration(), "krl", tmp_path / "p.src", envelope=Envelope.parse("0,0,0,1,1,1"))
+    assert not isinstance(err.value, (CalibrationNotOk, ToolTilted))
     assert files(tmp_path) == []
 
 

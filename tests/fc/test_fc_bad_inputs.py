@@ -1,7 +1,7 @@
 """Inside FreeCAD the fuzz tests' bad files get a message in the Report view and leave the document as it
-was: no object added, no undo step.  Run under freecadcmd through the functions the GUI commands call
-(import scan, import model, calibrated toolpath from a G-code file, a calibration whose stored result
-is corrupt), wrapped in ``guarded`` as every command's Activated is."""
+was: no object added, no undo step.  Run under freecadcmd through the ``workcal_wb.fc`` functions the
+GUI commands record and run (import scan, import model, calibrated toolpath from a G-code file, a
+calibration whose stored result is corrupt), wrapped in ``guarded`` as every command's Activated is."""
 import numpy as np
 import pytest
 
@@ -12,12 +12,11 @@ from fuzz_inputs import GCODE, POINTS, SEEDS, apply, random_mutations, result_js
 from workcal_wb.core.errors import WorkCalError  # noqa: E402
 from workcal_wb.core.readers import read_cloud  # noqa: E402
 from workcal_wb.core.toolpath import read_gcode  # noqa: E402
+from workcal_wb.core.result import CalibrationResult  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
-from workcal_wb.fc.undo import transaction  # noqa: E402
-from workcal_wb.gui.commands import models as model_commands  # noqa: E402
-from workcal_wb.gui.commands import toolpath as toolpath_commands  # noqa: E402
-from workcal_wb.gui.commands.import_scan import import_scan_files  # noqa: E402
-from workcal_wb.gui.task_panels.common import guarded  # noqa: E402
+from workcal_wb.fc.models import import_model  # noqa: E402
+from workcal_wb.fc.scan import import_scan  # noqa: E402
+from workcal_wb.fc.toolpath import make_calibrated_path  # noqa: E402
 
 PER_FORMAT = 4  # refused files per format: the first half of the file, and mutations the reader refuses
 
@@ -62,8 +61,13 @@ def state(doc) -> tuple:
 
 
 def run_command(title, function, *args, **kwargs):
-    """What a command's Activated does: the WorkCalError becomes a Report view message, nothing is raised."""
-    return guarded(title)(function)(*args, **kwargs)
+    """What a command's Activated does (``gui.task_panels.common.guarded``, not importable headless): the
+    WorkCalError becomes a Report view message, nothing is raised."""
+    try:
+        return function(*args, **kwargs)
+    except WorkCalError as exc:
+        FreeCAD.Console.PrintError(f"WorkCal: {exc}\n")
+    return None
 
 
 def assert_reported(capfd, path):
@@ -76,7 +80,7 @@ def test_bad_scan_files_are_reported_and_change_nothing(bad_models, doc, capfd):
     capfd.readouterr()
     before = state(doc)
     for path in bad_models:
-        assert run_command("Import scan", import_scan_files, [path], units="mm", doc=doc, background=False) is None
+        assert run_command("Import scan", import_scan, doc, path, "mm") is None
         assert_reported(capfd, path)
         assert state(doc) == before, path
 
@@ -85,12 +89,8 @@ def test_bad_model_files_are_reported_and_change_nothing(bad_models, doc, capfd)
     capfd.readouterr()
     before = state(doc)
 
-    def load(path):  # as the model panel loads a file: inside the panel's one undo step
-        with transaction(doc, "Choose models"):
-            model_commands.import_model(path, doc, units="mm")
-
     for path in bad_models:
-        assert run_command("Models", load, path) is None
+        assert run_command("Models", import_model, doc, path, "mm") is None
         assert_reported(capfd, path)
         assert state(doc) == before, path
 
@@ -100,7 +100,7 @@ def calibration(doc):
     """An ok calibration object, as the Calibrate command leaves it (not recomputed: it has no inputs here)."""
     obj = doc.addObject("Part::FeaturePython", "Calibration")
     co.CalibrationFeature(obj)
-    co.apply_result(obj, co.CalibrationResult.from_text(result_json(), "result"))
+    co.store_result(obj, CalibrationResult.from_text(result_json(), "result"))
     obj.purgeTouched()
     doc.clearUndos()
     return obj
@@ -110,7 +110,7 @@ def test_bad_gcode_files_are_reported_and_change_nothing(doc, calibration, tmp_p
     capfd.readouterr()
     before = state(doc)
     for path in refused(tmp_path, "part.nc", GCODE, read_gcode, 12, 14):
-        assert run_command("Calibrated toolpath", toolpath_commands.transform_toolpath, doc, calibration, path) is None
+        assert run_command("Calibrated toolpath", make_calibrated_path, calibration, path) is None
         assert_reported(capfd, path)
         assert state(doc) == before, path
 
@@ -129,8 +129,7 @@ def test_a_corrupt_stored_result_is_reported_and_changes_nothing(doc, calibratio
         except WorkCalError:
             pass
         before = state(doc)
-        assert run_command("Calibrated toolpath", toolpath_commands.transform_toolpath, doc, calibration,
-                           tmp_path / "part.nc") is None
+        assert run_command("Calibrated toolpath", make_calibrated_path, calibration, tmp_path / "part.nc") is None
         err = capfd.readouterr().err
         assert "calibration 'Calibration'" in err and "unexpected error" not in err, err
         assert state(doc) == before

@@ -67,19 +67,18 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
                               method="robust", seed=SEED)
     assert cal.TypeId == "Part::FeaturePython" and co.is_calibration(cal)
     assert cal.Status == "ok", cal.Reasons
-    W, U, V = matrix(cal.WMatrix), matrix(cal.UMatrix), matrix(cal.VMatrix)
+    W, U, V = matrix(cal.W), matrix(cal.U), matrix(cal.V)
     assert_pose(W, scene.W)
     assert_pose(U, scan.U)
     assert_pose(V, scan.V)
     np.testing.assert_allclose(W, frames.invert(V) @ U, atol=1e-6)
     np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-6)  # the object sits at W in B
-    np.testing.assert_allclose(matrix(cal.W), W, atol=1e-6)
-    np.testing.assert_allclose(tuple(cal.WEulerZYZ), frames.euler_zyz(W), atol=1e-9)
-    assert cal.WOmega.Value == pytest.approx(frames.omega(W))
-    np.testing.assert_allclose(tuple(cal.WTranslation), W[:3, 3], atol=1e-9)
-    assert 0 < cal.WorkpieceRMS.Value < 0.3 and 0 < cal.ReferenceRMS.Value < 0.3
-    assert cal.WorkpieceWithinTolerance > 50
-    assert 0 < cal.SurfaceBound.Value < 0.3
+    assert cal.EulerZYZ == co.euler_text(W) and "phi" in cal.EulerZYZ
+    assert cal.Omega.Value == pytest.approx(frames.omega(W))
+    assert 0 < cal.PartRMS.Value < 0.3 and 0 < cal.RefRMS.Value < 0.3
+    assert 0 < cal.AtSurface.Value < 0.3
+    assert cal.getEnumerationsOfProperty("Status") == co.STATUSES and not cal.Accepted
+    assert cal.FrameSize.Value == pytest.approx(co.FRAME_FRACTION * scene.workpiece_model().diagonal())
     assert cal.Scan == objs["scan"] and cal.Workpiece == objs["workpiece"] and cal.Reference == objs["reference"]
     assert cal.Method == "robust" and cal.Tolerance.Value == pytest.approx(0.3) and cal.Regions == "Auto"
     assert len(cal.Shape.Edges) == 9  # triads of X, B and S
@@ -101,21 +100,22 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
         assert cal.InputsKey == key
         for prop, value in before.items():
             assert cal.getPropertyByName(prop) == value
-        np.testing.assert_allclose(matrix(cal.WMatrix), W, atol=1e-9)
+        np.testing.assert_allclose(matrix(cal.W), W, atol=1e-9)
         np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-9)
+        assert co.type_of(cal) == co.TYPE and "WorkCalRole" not in cal.PropertiesList
         assert {"scan": cal.Scan.Name, "workpiece": cal.Workpiece.Name, "reference": cal.Reference.Name} == input_names
         assert "Touched" not in cal.State
         again = co.result_of(cal)
         assert again.to_dict() == result.to_dict()
 
         calls = []
-        original = co.run
-        co.run = lambda *a, **k: calls.append(1) or original(*a, **k)
+        original = co.fc_inputs.run
+        co.fc_inputs.run = lambda *a, **k: calls.append(1) or original(*a, **k)
         try:
             cal.touch()
             doc.recompute()  # same inputs and options: no new calibration
         finally:
-            co.run = original
+            co.fc_inputs.run = original
         assert calls == [] and cal.Status == "ok"
     finally:
         FreeCAD.closeDocument(doc.Name)
@@ -133,9 +133,9 @@ def test_recomputes_when_the_scan_changes(simulated, document):
     objs["scan"].Points = Points.Points([tuple(p) for p in frames.apply(T, scan.points).tolist()])
     doc.recompute()
     assert cal.Status == "ok"
-    assert_pose(matrix(cal.UMatrix), T @ scan.U)
-    assert_pose(matrix(cal.VMatrix), T @ scan.V)
-    assert_pose(matrix(cal.WMatrix), scene.W)
+    assert_pose(matrix(cal.U), T @ scan.U)
+    assert_pose(matrix(cal.V), T @ scan.V)
+    assert_pose(matrix(cal.W), scene.W)
     # An option change recomputes too: the stored options and the result follow.
     cal.Tolerance = 0.5
     doc.recompute()
@@ -153,7 +153,7 @@ def test_picked_regions_are_used(simulated, document):
                 reference=np.flatnonzero(scan.mask("reference")))
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], regions="Picked", seed=SEED)
     assert cal.Regions == "Picked" and co.result_of(cal).regions["source"] == "user"
-    assert_pose(matrix(cal.WMatrix), scene.W)
+    assert_pose(matrix(cal.W), scene.W)
 
 
 def test_bad_inputs_leave_the_document_unchanged(simulated, document):
@@ -194,17 +194,17 @@ def test_failed_calibration_is_kept_with_its_reasons(simulated, document):
 
 
 def placed_models(doc):
-    return [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
+    return placed_model.objects_of(doc, placed_model.TYPE)
 
 
 def test_placed_model_follows_w(simulated, document):
     scene, _ = simulated
     doc, objs = document
-    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], placed_model=True,
-                              seed=SEED)
-    [placed] = placed_models(doc)
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], seed=SEED)
+    placed = placed_model.show_in_robot_frame(cal)
+    assert placed_models(doc) == [placed] and placed.Frame == placed_model.IN_ROBOT_FRAME
     assert placed.Source == objs["workpiece"] and placed.Calibration == cal
-    W = matrix(cal.WMatrix)
+    W = matrix(cal.W)
     np.testing.assert_allclose(matrix(placed.Placement), W, atol=1e-9)
     # What the view shows is the workpiece model moved by W: X-A in the robot base frame B.
     shown = np.array([tuple(v) for v in placed.Mesh.Topology[0]])
@@ -214,7 +214,7 @@ def test_placed_model_follows_w(simulated, document):
     # the copy still lands where the scan saw the part.
     objs["workpiece"].Placement = FreeCAD.Placement(FreeCAD.Vector(5, 0, 0), FreeCAD.Rotation())
     doc.recompute()
-    moved_W = matrix(cal.WMatrix)
+    moved_W = matrix(cal.W)
     np.testing.assert_allclose(matrix(placed.Placement), moved_W @ frames.rigid(translation=[5, 0, 0]), atol=1e-9)
     np.testing.assert_allclose(matrix(placed.Placement), W, atol=0.05)
 
@@ -226,35 +226,64 @@ def test_undo_redo_of_a_calibration_with_its_placed_model(simulated, document):
     doc, objs = document
     doc.UndoMode = 1
     before = names(doc)
-    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], placed_model=True,
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], overlays=True,
                               resamples=2, seed=SEED)
     after = names(doc)
-    assert len(after) == len(before) + 2 and len(placed_models(doc)) == 1
+    assert len(after) == len(before) + 3 and len(placed_models(doc)) == 2  # the calibration and both models on the scan
     for _ in range(2):
         doc.undo()
         assert [o.Name for o in doc.Objects if o.Name is None] == [] and names(doc) == before
         doc.redo()
-        assert names(doc) == after and len(placed_models(doc)) == 1
+        assert names(doc) == after and len(placed_models(doc)) == 2
     assert doc.getObject(cal.Name).Status == "ok"
     FreeCAD.closeDocument(doc.Name)  # used to crash FreeCAD 1.0
 
 
+def test_models_on_the_scan_sit_on_its_points(simulated, document):
+    """The result step's overlay: the workpiece model placed by U and the reference model by V land on the
+    scan points they were matched to (to the scan's noise), so a wrong match shows at a glance."""
+    _, scan = simulated
+    doc, objs = document
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], overlays=True, seed=SEED)
+    for role in placed_model.ROLES:
+        placed = placed_model.find(cal, role, placed_model.ON_SCAN)
+        assert placed is not None and placed.Role == role and placed.Candidate == 0
+        model = placed.Mesh.copy()
+        model.Placement = placed.Placement
+        shown = np.array([tuple(v) for v in model.Topology[0]])
+        truth = scan.U if role == "workpiece" else scan.V
+        source = objs[role].Mesh
+        expected = frames.apply(truth, np.array([tuple(v) for v in source.Topology[0]]))
+        assert np.abs(shown - expected).max() < 0.3
+    assert placed_model.candidate_poses(cal, "workpiece")[0] is not None
+    assert placed_model.tie_breaker(cal, "workpiece") == "" or "differ" in placed_model.tie_breaker(cal, "workpiece")
+
+
 def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
-    from workcal_wb.fc import deviation_view
+    from workcal_wb.core.deviation import BEYOND_ADDED, WITHIN
+    from workcal_wb.fc import deviation_map
 
     scene, scan = simulated
     doc, objs = document
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], seed=SEED)
     before = names(doc)
-    dev = deviation_view.make_deviation_map(doc, cal)
+    dev = deviation_map.make_deviation_map(cal)
     assert names(doc) == sorted(before + [dev.Name])
     d = np.array(dev.Deviations)
     assert len(d) == len(co.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
     assert len(dev.Color) == len(d)
     assert np.nanmax(d) > 1.0  # the lump stands out of the model
-    assert dev.Max.Value > 1.0 and dev.WithinTolerance > 50
-    lump_colour = np.array(dev.Color[int(np.nanargmax(d))][:3])
-    assert lump_colour[0] > 0.9 and lump_colour[2] < 0.1  # red
+    assert dev.Max.Value > 1.0 and dev.Within > 50
+    colours = np.array(dev.Color)[:, :3]
+    assert np.allclose(colours[int(np.nanargmax(d))], BEYOND_ADDED, atol=1 / 255)  # past the limit: dark red
+    # Read against the tolerance: the lump's flanks, out of tolerance by a little, are plainly not green
+    # (a scale stretched to the data's extremes painted them green).
+    assert dev.AutoLimit and dev.Limit.Value == pytest.approx(3 * dev.Tolerance.Value)
+    flank = np.flatnonzero((d > 1.3 * dev.Tolerance.Value) & (d < 2.5 * dev.Tolerance.Value))
+    assert len(flank) > 5
+    assert np.linalg.norm(colours[flank] - np.array(WITHIN), axis=1).min() > 0.5
+    inside = np.flatnonzero(np.abs(d) <= dev.Tolerance.Value)
+    np.testing.assert_allclose(colours[inside], np.tile(WITHIN, (len(inside), 1)), atol=1 / 255)
     # The points with a large deviation are where the clay was added (truth: the reshaped vertices).
     moved = scene.reshaped.displacement_mm > 1.0
     lump_centre_S = frames.apply(scan.U, scene.workpiece_model().points[moved].mean(axis=0)[None])[0]
@@ -268,7 +297,7 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     doc = FreeCAD.openDocument(path)
     try:
         dev = doc.getObject(name)
-        assert isinstance(dev.Proxy, deviation_view.DeviationFeature) and deviation_view.is_deviation_map(dev)
+        assert isinstance(dev.Proxy, deviation_map.DeviationFeature) and deviation_map.is_deviation_map(dev)
         np.testing.assert_array_equal(np.array(dev.Deviations), d)
         np.testing.assert_allclose(np.array(dev.Color), np.array(colours), atol=1 / 255)  # saved as 8-bit RGBA
         assert "Touched" not in dev.State
@@ -279,15 +308,14 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
 
 def test_deviation_map_refuses_a_calibration_without_u(document):
     from workcal_wb.core.result import CalibrationResult
-    from workcal_wb.fc import deviation_view
+    from workcal_wb.fc import deviation_map
 
     doc, objs = document
-    inputs = co.gather_inputs(objs["scan"], objs["workpiece"], objs["reference"])
-    failed = CalibrationResult("failed", W=None, reasons=["test"])
-    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], result=failed, inputs=inputs)
+    cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], resamples=1, seed=SEED)
+    co.store_result(cal, CalibrationResult("failed", W=None, reasons=["test: no pose"]), cal.InputsKey)
     before = names(doc)
     with pytest.raises(InputError, match="no U"):
-        deviation_view.make_deviation_map(doc, cal)
+        deviation_map.make_deviation_map(cal)
     assert names(doc) == before
 
 
@@ -301,19 +329,19 @@ def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     gcode.write_text(format_gcode(sample_toolpath(scene)), encoding="utf-8")
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], toolpath=str(gcode),
                               seed=SEED)
-    assert cal.ToolpathFile == str(gcode) and cal.Toolpath is None
+    assert cal.GcodeFile == str(gcode) and cal.Toolpath is None
     result = co.result_of(cal)
     assert result.inputs["toolpath_points"] > 100
-    assert 0 < cal.ToolpathBound.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
-    assert cal.ToolpathBound.Value < 0.3
+    assert 0 < cal.AtToolpath.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
+    assert cal.AtToolpath.Value < 0.3
     calls = []
-    original = co.run
-    co.run = lambda *a, **k: calls.append(1) or original(*a, **k)
+    original = co.fc_inputs.run
+    co.fc_inputs.run = lambda *a, **k: calls.append(1) or original(*a, **k)
     try:
         cal.touch()
         doc.recompute()  # the file is part of the inputs: unchanged, so no new calibration
     finally:
-        co.run = original
+        co.fc_inputs.run = original
     assert calls == []
 
 
@@ -325,8 +353,16 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     up = tuple(float(v) for v in scan.V[:3, :3] @ np.array([0.0, 0.0, 1.0]))
     obj = co.make_calibration(doc, o["scan"], o["workpiece"], o["reference"], scanner_origin=(0.0, 0.0, 0.0), up=up,
                               resamples=2)
-    assert obj.ScannerOriginGiven and tuple(obj.Up) == pytest.approx(up)
+    assert obj.ScannerOn and tuple(obj.Scanner) == (0.0, 0.0, 0.0) and tuple(obj.Up) == pytest.approx(up)
     options = co.options_of(obj)
     assert options.scanner_origin == (0.0, 0.0, 0.0) and options.up == pytest.approx(up)
+    assert co.inputs_of(obj).options == options
+    assert obj.Status == "ok"
+    assert_pose(matrix(obj.W), scene.W)
+    co.update_calibration(obj, resamples=2)  # options not given stay
+    assert co.options_of(obj).scanner_origin == (0.0, 0.0, 0.0) and co.options_of(obj).up == pytest.approx(up)
+    co.update_calibration(obj, scanner_origin=None, up=None, resamples=2)  # None: from the file or the data again
+    assert not obj.ScannerOn and obj.Up.Length == 0
+    assert co.options_of(obj).scanner_origin is None and co.options_of(obj).up is None
     assert obj.Status == "ok"
     assert_pose(matrix(obj.W), scene.W)

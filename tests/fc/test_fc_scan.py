@@ -117,9 +117,17 @@ def test_regions_round_trip_and_survive_reopen(doc, tmp_path):
     assert regions["workpiece"].tolist() == list(range(100, 400))
     assert regions["reference"].tolist() == [5, 7, 999]
     assert regions["source"] == "auto" and scan.has_regions(obj)
-    assert obj.WorkpiecePoints == 300 and obj.ReferencePoints == 3
+    assert obj.Workpiece == 300 and obj.Reference == 3
+    # As WorkCal 0.1 saved a scan: the counts and the source under longer names; reopening brings them up to date.
+    obj.removeProperty("Source")
+    obj.addProperty("App::PropertyEnumeration", "RegionSource", "Regions", "")
+    obj.RegionSource = scan.REGION_SOURCES
+    obj.RegionSource = "auto"
+    obj.addProperty("App::PropertyInteger", "WorkpiecePoints", "Regions", "")
     name = obj.Name
     doc2 = reopen(doc, tmp_path / "regions.FCStd")
+    assert {"RegionSource", "WorkpiecePoints"}.isdisjoint(doc2.getObject(name).PropertiesList)
+    assert doc2.getObject(name).Workpiece == 300
     again = scan.get_regions(doc2.getObject(name))
     assert again["workpiece"].dtype.kind == "i"
     np.testing.assert_array_equal(again["workpiece"], regions["workpiece"])

@@ -1,4 +1,6 @@
 """FreeCAD layer under freecadcmd: read a Path Job, transform it, make a Path object and a Robot trajectory."""
+import types
+
 import numpy as np
 import pytest
 
@@ -59,11 +61,16 @@ def test_read_job_follows_its_commands_with_feeds_in_mm_per_min(job):
     assert tp.header[0] == "Profile"
 
 
+def path_object(path, name="calibrated"):
+    """What read_toolpath needs of a document object holding ``path``."""
+    return types.SimpleNamespace(Path=path, TypeId="Path::Feature", Label=name)
+
+
 def test_path_object_round_trip_keeps_arcs(job):
-    doc = job.Document
     tp = fctp.read_toolpath(job)
-    obj = fctp.make_path_object(doc, tp, calibration(TURNED), name="Turned")
-    again = fctp.read_toolpath(obj)
+    path, forced = fctp.calibrated_path(tp, calibration(TURNED))
+    assert not forced
+    again = fctp.read_toolpath(path_object(path))
     expected = transformed(tp, TURNED)
     assert [m.kind for m in again.moves] == [m.kind for m in expected.moves]
     for m, n in zip(again.moves, expected.moves):
@@ -71,29 +78,22 @@ def test_path_object_round_trip_keeps_arcs(job):
         assert m.feed == pytest.approx(n.feed) if n.feed else m.feed is None
         if n.is_arc:
             np.testing.assert_allclose(m.centre, n.centre, atol=1e-6)
-    doc.removeObject(obj.Name)
 
 
 def test_path_object_of_a_tilted_w_matches_numpy_point_by_point(job):
-    doc = job.Document
     tp = fctp.read_toolpath(job)
-    obj = fctp.make_path_object(doc, tp, calibration(TILTED), name="Tilted")
-    assert {c.Name for c in obj.Path.Commands if not c.Name.startswith("(")} <= {"G0", "G1"}
-    again = fctp.read_toolpath(obj)
+    path, _ = fctp.calibrated_path(tp, calibration(TILTED))
+    assert {c.Name for c in path.Commands if not c.Name.startswith("(")} <= {"G0", "G1"}
+    again = fctp.read_toolpath(path_object(path))
     np.testing.assert_allclose(again.points(), frames.apply(TILTED, linearised(tp).points()), atol=1e-6)
-    doc.removeObject(obj.Name)
 
 
-def test_failed_calibration_makes_no_object_unless_forced(job):
-    doc = job.Document
+def test_failed_calibration_is_refused_unless_forced(job):
     tp = fctp.read_toolpath(job)
-    before = len(doc.Objects)
     with pytest.raises(ExportRefused, match="status is 'failed'"):
-        fctp.make_path_object(doc, tp, calibration(TURNED, "failed"))
-    assert len(doc.Objects) == before
-    obj = fctp.make_path_object(doc, tp, calibration(TURNED, "failed"), force=True, name="Forced")
-    assert obj.Label == "Forced (FORCED)" and obj.Path.Commands[0].Name.startswith("(FORCED EXPORT")
-    doc.removeObject(obj.Name)
+        fctp.calibrated_path(tp, calibration(TURNED, "failed"))
+    path, forced = fctp.calibrated_path(tp, calibration(TURNED, "failed"), force=True)
+    assert forced and path.Commands[0].Name.startswith("(FORCED EXPORT")
 
 
 def test_not_a_path_is_an_input_error(job):

@@ -7,6 +7,9 @@
 * ``view_driver``: synthetic mouse and key events sent through the real 3D view (Coin pixel positions).
 * ``pump(seconds)``: run the event loop for a while; ``settle()``: wait until the 3D view stops changing.
 * ``assert_ok_cancel(panel)``: the panel's standard buttons are OK and Cancel.
+* ``shoot_window(name)``: the whole main window as the user sees it (panel, tree and 3D view) as a PNG.
+* ``clipped_texts(widget)``, ``horizontal_scroll(widget)``, ``view_share(points)``: what a step must get
+  right at FreeCAD's default sizes: no text cut off, no sideways scrolling, the objects fill the view.
 Message boxes are off (``task_panels.common.INTERACTIVE = False``) so no modal dialog blocks a test;
 messages still reach the Report view, which is where tests read them.
 """
@@ -52,6 +55,59 @@ def settle(timeout_s: float = 5.0, quiet_s: float = 0.3) -> None:
             return
 
 
+def clipped_texts(root) -> list:
+    """The texts of visible labels, buttons, group boxes and combo boxes under ``root`` that do not fit the
+    room they have (Qt elides or clips them): a label's size hint wider than the label (or, for a wrapping
+    label, taller than it at its width), a button or combo box narrower than its text."""
+    found = []
+    for widget in root.findChildren(QtWidgets.QWidget):
+        if not widget.isVisible() or widget.width() <= 0:
+            continue
+        if isinstance(widget, QtWidgets.QLabel) and widget.text() and not widget.pixmap():
+            if widget.wordWrap():
+                if widget.heightForWidth(widget.width()) > widget.height() + 1:
+                    found.append(f"label {widget.text()!r}: {widget.heightForWidth(widget.width())} px high "
+                                 f"in {widget.height()} px")
+            elif widget.sizeHint().width() > widget.width() + 1:
+                found.append(f"label {widget.text()!r}: {widget.sizeHint().width()} px in {widget.width()} px")
+        elif isinstance(widget, QtWidgets.QAbstractButton) and widget.text():
+            if widget.sizeHint().width() > widget.width() + 1:
+                found.append(f"button {widget.text()!r}: {widget.sizeHint().width()} px in {widget.width()} px")
+        elif isinstance(widget, QtWidgets.QGroupBox) and widget.title():
+            needed = widget.fontMetrics().boundingRect(widget.title()).width() + 16
+            if needed > widget.width():
+                found.append(f"group {widget.title()!r}: {needed} px in {widget.width()} px")
+        elif isinstance(widget, QtWidgets.QComboBox) and widget.currentText():
+            needed = widget.fontMetrics().boundingRect(widget.currentText()).width() + 30  # the arrow
+            if needed > widget.width():
+                found.append(f"combo {widget.currentText()!r}: {needed} px in {widget.width()} px")
+    return found
+
+
+def horizontal_scroll(widget) -> bool:
+    """Whether the task view holding ``widget`` scrolls sideways (its content wider than the panel)."""
+    parent = widget.parentWidget()
+    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+        parent = parent.parentWidget()
+    return parent is not None and parent.horizontalScrollBar().isVisible()
+
+
+def view_share(points) -> float:
+    """The largest share of the 3D view's width or height the box of ``points`` covers on the screen
+    (0 when part of it is off screen)."""
+    import numpy as np
+
+    from workcal_wb.gui.view import box_corners, screen_box
+
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    box = np.array([points.min(axis=0), points.max(axis=0)])
+    x0, y0, x1, y1 = screen_box(active_view(), box_corners(box))
+    width, height = active_view().getSize()
+    if x0 < -2 or y0 < -2 or x1 > width + 2 or y1 > height + 2:
+        return 0.0
+    return max((x1 - x0) / width, (y1 - y0) / height)
+
+
 def assert_ok_cancel(panel) -> None:
     """The task panel asks FreeCAD for OK and Cancel in a form every PySide accepts (Qt6 flags are not ints)."""
     box = QtWidgets.QDialogButtonBox(panel.getStandardButtons())
@@ -61,6 +117,24 @@ def assert_ok_cancel(panel) -> None:
 @pytest.fixture(name="assert_ok_cancel")
 def assert_ok_cancel_fixture():
     return assert_ok_cancel
+
+
+@pytest.fixture(name="page_fits")
+def page_fits_fixture():
+    """``page_fits(widget)``: wait for the view to settle, then assert no text is cut off and nothing scrolls
+    sideways in the task panel holding ``widget``."""
+
+    def check(widget):
+        settle()
+        assert not clipped_texts(widget), clipped_texts(widget)
+        assert not horizontal_scroll(widget), "the panel is wider than FreeCAD's task view"
+
+    return check
+
+
+@pytest.fixture(name="view_share")
+def view_share_fixture():
+    return view_share
 
 
 @pytest.fixture(name="settle")
@@ -137,6 +211,36 @@ def active_view():
     view = FreeCADGui.ActiveDocument.ActiveView
     assert hasattr(view, "saveImage"), "the active view is not a 3D view"
     return view
+
+
+def grab_window(path) -> None:
+    """The main window as a PNG with the 3D view drawn in (Qt's grab leaves an OpenGL view grey)."""
+    import os
+    import tempfile
+
+    window = FreeCADGui.getMainWindow()
+    pump(0.1)
+    image = window.grab().toImage()
+    view = active_view()
+    viewport = view.graphicsView().viewport()
+    width, height = viewport.width(), viewport.height()
+    with tempfile.TemporaryDirectory() as folder:
+        rendered = os.path.join(folder, "view.png")
+        view.saveImage(rendered, width, height, "Current")
+        painter = QtGui.QPainter(image)
+        painter.drawImage(viewport.mapTo(window, QtCore.QPoint(0, 0)), QtGui.QImage(rendered))
+        painter.end()
+    assert image.save(str(path)), f"screenshot {path} not written"
+
+
+@pytest.fixture
+def shoot_window(output_dir):
+    def save(name: str) -> Path:
+        path = Path(output_dir) / f"{name}.png"
+        grab_window(path)
+        return path
+
+    return save
 
 
 @pytest.fixture

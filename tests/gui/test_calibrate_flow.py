@@ -106,19 +106,6 @@ def object_names(doc):
     return sorted(o.Name for o in doc.Objects)
 
 
-def task_button(which):
-    """The OK or Cancel button of the open task dialog (what the user clicks)."""
-    wanted = {"ok": QtWidgets.QDialogButtonBox.Ok, "cancel": QtWidgets.QDialogButtonBox.Cancel}[which]
-    end = time.monotonic() + 3.0
-    while time.monotonic() < end:  # the task view shows the buttons once the event loop has run
-        for box in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDialogButtonBox):
-            button = box.button(wanted)
-            if button is not None and button.isVisible() and button.isEnabled():
-                return button
-        pump(0.05)
-    return None
-
-
 def wait_for(predicate, timeout_s=60.0):
     end = time.monotonic() + timeout_s
     while not predicate() and time.monotonic() < end:
@@ -148,127 +135,174 @@ def test_01_import_simulated_scene(step, workbench, output_dir):
     screenshot(output_dir, "01_imported.png")
 
 
-def test_02_cancel_midway_leaves_the_document_unchanged(step, output_dir):
-    from workcal_wb.gui.commands.calibrate import open_panel
+def open_calibrate_step(doc):
+    from workcal_wb.gui.commands.guide import open_guide
 
+    guide = open_guide(doc, "calibrate")
+    return guide, guide.steps["calibrate"]
+
+
+def test_02_cancel_midway_leaves_the_document_unchanged(step, output_dir):
     flow = step
     doc = flow["doc"]
     before, undo_before = object_names(doc), doc.UndoCount
-    panel = open_panel(doc)
-    panel.set_options(seed=SEED)
-    assert FreeCADGui.Control.activeDialog()
-    assert panel.start()
-    assert wait_for(lambda: panel.progress_bar.value() > 0 or panel.state != "running", 30)  # under way
-    assert panel.state == "running"
-    cancel = task_button("cancel")
-    assert cancel is not None, "the task dialog's Cancel button was not found"
-    cancel.click()  # what the user does: reject() asks the worker to stop
-    assert panel.wait(60) == "cancelled"
+    guide, page = open_calibrate_step(doc)
+    page.set_options(seed=SEED, regions="Auto")
+    assert page.start()
+    assert wait_for(lambda: page.progress_bar.value() > 0 or not page.busy(), 30)  # under way
+    assert page.busy() and page.cancel_button.isVisible()
+    page.cancel_button.click()  # what the user does: the worker is asked to stop
+    assert page.wait(60) == "cancelled"
     assert object_names(doc) == before and doc.UndoCount == undo_before
-    assert not FreeCADGui.Control.activeDialog()
+    assert "unchanged" in page.message.text() and FreeCADGui.Control.activeDialog()  # the guide stays
+    assert guide.states()["calibrate"][0] == "todo"
     screenshot(output_dir, "02_after_cancel.png")
+    guide.close()
 
 
 def test_03_bad_input_reports_and_changes_nothing(step, report):
-    from workcal_wb.gui.commands.calibrate import open_panel
-
     flow = step
     doc = flow["doc"]
-    group = doc.addObject("App::DocumentObjectGroup", "NotAModel")
     before = object_names(doc)
-    panel = open_panel(doc)
-    panel.set_inputs(workpiece=group)
-    assert not panel.start()
-    assert panel.state == "failed" and "NotAModel" in panel.last_error
-    assert "NotAModel" in panel.status_label.text()
-    assert "NotAModel" in report.since()  # the message reached the Report view
+    guide, page = open_calibrate_step(doc)
+    assert not page.picked_regions.isEnabled()  # nothing picked on the scan yet
+    page.set_options(regions="Picked")  # as a script could: refused with the reason
+    assert not page.start()
+    assert page.state_name == "failed" and "no workpiece and no reference region" in page.last_error
+    assert "region" in page.message.text()
+    assert "no workpiece and no reference region" in report.since()  # the message reached the Report view
     assert FreeCADGui.Control.activeDialog()  # the user can fix the input
-    panel.reject()
+    guide.close()
     pump()
     assert not FreeCADGui.Control.activeDialog()
     assert object_names(doc) == before
-    doc.removeObject(group.Name)
 
 
-def test_04_calibrate_through_the_task_panel(step, output_dir, assert_ok_cancel):
-    from workcal_wb.gui.commands.calibrate import open_panel
-
+def test_04_calibrate_through_the_guide(step, output_dir, page_fits):
     flow = step
     doc, scene = flow["doc"], flow["scene"]
     before, undo_before = object_names(doc), doc.UndoCount
-    panel = open_panel(doc)
-    assert_ok_cancel(panel)
-    assert panel._chosen("scan") == flow["scan_obj"] and panel._chosen("workpiece") == flow["workpiece"]
-    assert panel._chosen("reference") == flow["reference"]
-    panel.set_options(method="robust", tolerance_mm=0.3, regions="Auto", seed=SEED, placed_model=True)
+    guide, page = open_calibrate_step(doc)
+    page_fits(guide.form)
+    page.set_options(method="robust", tolerance_mm=0.3, regions="Auto", seed=SEED)
     ticks = []  # while the worker thread runs (adding the result afterwards is main-thread work)
     timer = QtCore.QTimer()
-    timer.timeout.connect(lambda: panel.runner is not None and panel.runner.running and ticks.append(time.monotonic()))
+    timer.timeout.connect(lambda: page.runner is not None and page.runner.running and ticks.append(time.monotonic()))
     timer.start(20)
     progress_seen = []
-    ok = task_button("ok")
-    assert ok is not None, "the task dialog's OK button was not found"
-    ok.click()  # accept(): starts the worker, the dialog stays open
-    assert panel.state == "running"
-    while True:
+    page.start_button.click()  # starts the worker; the guide stays open
+    assert page.busy()
+    while page.busy():
         pump(0.05)
-        if panel.state != "running":  # done: the panel and its widgets are gone
-            break
-        bar = panel.progress
+        bar = page.status
         if bar is not None and bar.bar is not None:
             progress_seen.append(bar.bar.value())
     timer.stop()
-    assert panel.state == "done", panel.last_error
+    assert page.state_name == "done", page.last_error
     # The window stayed responsive: the timer kept firing while the worker ran.
     gaps = np.diff(ticks)
     assert len(ticks) > 20 and gaps.max() < 1.0, f"event loop blocked for {gaps.max():.2f} s"
     assert max(progress_seen) > 0  # the status-bar progress bar moved
-    cal = panel.created
+    assert guide.shown == "result"  # the result stays open
+    cal = guide.calibration()
     assert co.is_calibration(cal) and cal.Status == "ok", cal.Reasons
-    assert_pose(matrix_of(cal.WMatrix), scene.W)
-    assert_pose(matrix_of(cal.UMatrix), flow["scan"].U)
-    assert_pose(matrix_of(cal.VMatrix), flow["scan"].V)
-    # One undo step adds the calibration and the placed model; undo removes both, redo brings them back.
+    assert_pose(matrix_of(cal.W), scene.W)
+    assert_pose(matrix_of(cal.U), flow["scan"].U)
+    assert_pose(matrix_of(cal.V), flow["scan"].V)
+    # One undo step adds the calibration and both models on the scan; undo removes them, redo brings them back.
     assert doc.UndoCount == undo_before + 1
     added = sorted(set(object_names(doc)) - set(before))
-    assert cal.Name in added and len(added) == 2
+    assert cal.Name in added and len(added) == 3
     doc.undo()
     assert object_names(doc) == before
     doc.redo()
     assert object_names(doc) == sorted(before + added)
     cal = doc.getObject(cal.Name)
+    guide.close()
     assert not FreeCADGui.Control.activeDialog()
     assert cal.ViewObject.Proxy.getIcon().endswith("WorkCal_Calibration.svg")
+    assert not cal.ViewObject.Visibility  # the result step showed the scan frame, where B's triads are far away
+    cal.ViewObject.Visibility = True
     vp = cal.ViewObject.Proxy
-    assert vp.switch.whichChild.getValue() == 0 and vp.labels.getNumChildren() == 4  # colour + B, S, X
+    assert vp.switch.whichChild.getValue() == 0 and vp.labels.getNumChildren() == 5  # colour, font + B, S, X
     assert len(cal.ViewObject.LineColorArray) == 9  # red, green, blue axes
-    # The right-click menu (built with Qt6-safe calls) offers the placed model and the deviation map;
-    # asking for the placed model again does not add a second one.
+    # The right-click menu (built with Qt6-safe calls) offers the placed model and the deviation map, as
+    # recorded commands; asking for the placed model again does not add a second one.
     menu = QtWidgets.QMenu()
     vp.setupContextMenu(cal.ViewObject, menu)
     actions = {a.text(): a for a in menu.actions()}
-    assert set(actions) >= {"Show workpiece model in the robot frame", "Deviation map"}
-    placed_count = len([o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE])
-    actions["Show workpiece model in the robot frame"].trigger()
-    assert len([o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]) == placed_count == 1
+    assert set(actions) >= {"Show the workpiece model in the robot frame", "Deviation map"}
+    for _ in range(2):
+        actions["Show the workpiece model in the robot frame"].trigger()
+        pump()
+    in_b = [o for o in placed_model.objects_of(doc, placed_model.TYPE) if o.Frame == placed_model.IN_ROBOT_FRAME]
+    assert len(in_b) == 1
     # The placed model is drawn (a Python feature with no display mode would not be) and sits where
     # the workpiece stands beside the reference in B.
-    [placed] = [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
+    [placed] = in_b
     assert placed.ViewObject.Visibility and placed.ViewObject.DisplayMode in placed.ViewObject.listDisplayModes()
     shown = np.array([tuple(v) for v in placed.Mesh.Topology[0]])
     np.testing.assert_allclose(shown, frames.apply(scene.W, scene.workpiece_model().points), atol=0.5)
     flow["cal"] = cal
     screenshot(output_dir, "04_calibrated.png")
-    screenshot(output_dir, "04_placed_model_on_reference.png",
-               only=[o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE]
-               + [flow["reference"], cal])
+    screenshot(output_dir, "04_placed_model_on_reference.png", only=[placed, flow["reference"], cal])
+
+
+def property_names_cut_off(obj) -> list:
+    """The names of WorkCal's properties of ``obj`` that the property editor (FreeCAD's default panel
+    width) cannot show whole: a name wider than its cell is elided."""
+    window = FreeCADGui.getMainWindow()
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(obj)
+    pump(0.3)
+    editors = [t for t in window.findChildren(QtWidgets.QTreeView)
+               if t.isVisible() and t.model() is not None and t.model().columnCount() == 2
+               and str(t.model().headerData(0, QtCore.Qt.Horizontal)) == "Property"]
+    assert editors, "no property editor in the main window"
+    tree, ours = editors[0], set(obj.PropertiesList) - set(FreeCAD.ActiveDocument.addObject(
+        obj.TypeId.replace("Python", ""), "Plain").PropertiesList)
+    FreeCAD.ActiveDocument.removeObject("Plain")
+    model = tree.model()
+    cut = []
+    for group in (model.index(row, 0) for row in range(model.rowCount())):
+        tree.expand(group)
+        for row in range(model.rowCount(group)):
+            index = model.index(row, 0, group)
+            text = str(index.data())
+            if text.replace(" ", "") not in ours:
+                continue
+            needed = tree.fontMetrics().boundingRect(text).width() + 6  # the cell's margins
+            if needed > tree.visualRect(index).width():
+                cut.append(f"{text}: {needed} px in {tree.visualRect(index).width()} px")
+    FreeCADGui.Selection.clearSelection()
+    return cut
+
+
+def test_04b_result_properties_read_whole(step):
+    """The property editor shows every name of WorkCal's properties whole at FreeCAD's default panel
+    width (names such as "WorkpieceWithinTolerance" used to be cut off)."""
+    from workcal_wb.fc.deviation_map import make_deviation_map
+    from workcal_wb.gui.task_panels import QtWidgets as widgets
+
+    combo = [d for d in FreeCADGui.getMainWindow().findChildren(widgets.QDockWidget) if d.objectName() == "Combo View"]
+    tabs = combo[0].findChild(widgets.QTabWidget) if combo else None
+    if tabs is not None:
+        tabs.setCurrentIndex(0)  # the Model tab, with the property editor
+    cal = step["cal"]
+    dev = make_deviation_map(cal)
+    try:
+        objects = [cal, dev, placed_model.find(cal, "workpiece", placed_model.ON_SCAN), cal.Scan]
+        cut = [f"{o.Label}: {c}" for o in objects for c in property_names_cut_off(o)]
+    finally:
+        step["doc"].removeObject(dev.Name)
+    assert not cut, cut
 
 
 def test_05_save_close_reopen(step, output_dir):
     flow = step
     doc, cal = flow["doc"], flow["cal"]
     stored, name = cal.ResultJson, cal.Name
-    W = matrix_of(cal.WMatrix)
+    W = matrix_of(cal.W)
     path = os.path.join(str(output_dir), "calibrated.FCStd")
     doc.saveAs(path)
     FreeCAD.closeDocument(doc.Name)
@@ -279,7 +313,11 @@ def test_05_save_close_reopen(step, output_dir):
     cal = doc.getObject(name)
     assert co.is_calibration(cal) and cal.ResultJson == stored and cal.Status == "ok"
     np.testing.assert_allclose(matrix_of(cal.Placement), W, atol=1e-9)
-    assert isinstance(cal.ViewObject.Proxy, co.ViewProviderCalibration)
+    from workcal_wb.gui.view_providers.calibration import ViewProviderCalibration
+
+    assert isinstance(cal.ViewObject.Proxy, ViewProviderCalibration)
+    for obj in placed_model.objects_of(doc, placed_model.TYPE):  # drawn again after reopening
+        assert obj.ViewObject.Proxy.__class__.__name__ == "ViewProviderPlacedModel"
     assert "Touched" not in cal.State
     flow["cal"] = cal
     flow["scan_obj"], flow["workpiece"], flow["reference"] = cal.Scan, cal.Workpiece, cal.Reference
@@ -293,11 +331,11 @@ def test_06_deviation_map_shows_the_lump(step, output_dir):
     flow = step
     doc, cal = flow["doc"], flow["cal"]
     undo_before = doc.UndoCount
-    dev = deviation_map(doc, cal)
-    assert doc.UndoCount == undo_before + 1
+    dev = deviation_map(cal)
+    assert doc.UndoCount == undo_before + 1 and not cal.Scan.ViewObject.Visibility
     d = np.array(dev.Deviations)
     assert np.nanmax(d) > 1.0 and dev.Max.Value > 1.0  # the clay lump stands out
-    assert dev.WithinTolerance > 50
+    assert dev.Within > 50
     assert dev.ViewObject.DisplayMode == "Color"
     vp = dev.ViewObject.Proxy
     assert vp.switch.whichChild.getValue() == 0 and vp.legend.getNumChildren() > 0  # colour bar shown
@@ -321,30 +359,30 @@ def _gcode_file(flow):
 def test_07_transform_and_export_toolpath(step, output_dir):
     from workcal_wb.core.toolpath import linearised, read_gcode
     from workcal_wb.fc.toolpath import read_toolpath
-    from workcal_wb.gui.commands.toolpath import export_toolpath, transform_toolpath
+    from workcal_wb.gui.commands.toolpath import choose_toolpath, export_program, transform_toolpath
 
     flow = step
     doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
     gcode, _ = _gcode_file(flow)
     toolpath = read_gcode(gcode)
-    W = matrix_of(cal.WMatrix)
+    W = matrix_of(cal.W)
+    choose_toolpath(doc, gcode)  # chosen once for the document
     undo_before = doc.UndoCount
-    path_obj = transform_toolpath(doc, cal, gcode)
+    path_obj = transform_toolpath(cal)
     assert doc.UndoCount == undo_before + 1
     moved = read_toolpath(path_obj)
     np.testing.assert_allclose(moved.points(), frames.apply(W, linearised(toolpath).points()), atol=1e-5)
     # Against the truth, the calibrated path lies within the tolerance of where it should be.
     error = np.linalg.norm(moved.points() - frames.apply(scene.W, linearised(toolpath).points()), axis=1)
     assert error.max() < 0.1
-    screenshot(output_dir, "07_toolpath_in_B.png",
-               only=[path_obj, flow["reference"]]
-               + [o for o in doc.Objects if getattr(o, "WorkCalRole", "") == placed_model.ROLE])
+    in_b = [o for o in placed_model.objects_of(doc, placed_model.TYPE) if o.Frame == placed_model.IN_ROBOT_FRAME]
+    screenshot(output_dir, "07_toolpath_in_B.png", only=[path_obj, flow["reference"]] + in_b)
 
     for fmt, ext in (("krl", ".src"), ("csv", ".csv"), ("rapid", ".mod"), ("urscript", ".script"),
                      ("fanuc", ".ls"), ("gcode", ".nc")):
         out = os.path.join(str(output_dir), f"program{ext}")
         # the sample scene tilts the part a few degrees: G-code for a 5-axis machine (3-axis is refused)
-        export_toolpath(cal, gcode, out, fmt, **({"machine": "5axis-tcp"} if fmt == "gcode" else {}))
+        export_program(cal, out, fmt, **({"machine": "5axis-tcp"} if fmt == "gcode" else {}))
         assert os.path.getsize(out) > 100
     with open(os.path.join(str(output_dir), "program.csv"), encoding="utf-8") as fh:
         rows = [r for r in csv.reader(line for line in fh if not line.startswith("#"))]
@@ -357,35 +395,36 @@ def test_07_transform_and_export_toolpath(step, output_dir):
 
 def test_08_failed_calibration_needs_force(step):
     from workcal_wb.core.result import CalibrationResult
-    from workcal_wb.core.toolpath import ExportRefused
-    from workcal_wb.gui.commands.toolpath import export_toolpath, transform_toolpath
+    from workcal_wb.core.toolpath import CalibrationNotOk
+    from workcal_wb.gui.commands.toolpath import export_program, transform_toolpath
 
     flow = step
     doc, cal = flow["doc"], flow["cal"]
-    gcode, _ = _gcode_file(flow)
     good = co.result_of(cal)
     bad = CalibrationResult.from_dict({**good.to_dict(), "status": "failed", "reasons": ["test: gates failed"]})
-    inputs = co.gather_inputs(cal.Scan, cal.Workpiece, cal.Reference)
-    failed = co.make_calibration(doc, cal.Scan, cal.Workpiece, cal.Reference, result=bad, inputs=inputs,
-                                 name="FailedCalibration")
+    failed = co.make_calibration(doc, cal.Scan, cal.Workpiece, cal.Reference, resamples=1, name="FailedCalibration")
+    co.store_result(failed, bad, failed.InputsKey)
     assert failed.Status == "failed"
     before = object_names(doc)
-    with pytest.raises(ExportRefused):
-        transform_toolpath(doc, failed, gcode)
+    with pytest.raises(CalibrationNotOk):
+        transform_toolpath(failed)
     assert object_names(doc) == before
-    assert common.with_force(lambda force: transform_toolpath(doc, failed, gcode, force=force),
+    assert common.with_force(lambda force: transform_toolpath(failed, force=force),
                              confirm=lambda reason: False) is None
     assert object_names(doc) == before
-    forced = common.with_force(lambda force: transform_toolpath(doc, failed, gcode, force=force),
+    forced = common.with_force(lambda force: transform_toolpath(failed, force=force),
                                confirm=lambda reason: "failed" in reason)
-    assert "FORCED" in forced.Label
+    assert "FORCED" in forced.Label and forced.Forced
     out = os.path.join(str(flow["dir"]), "refused.src")
-    with pytest.raises(ExportRefused):
-        export_toolpath(failed, gcode, out)
+    with pytest.raises(CalibrationNotOk):
+        export_program(failed, out)
     assert not os.path.exists(out)
-    job = common.with_force(lambda force: export_toolpath(failed, gcode, out, force=force), confirm=lambda r: True)
+    job = common.with_force(lambda force: export_program(failed, out, force=force), confirm=lambda r: True)
     assert job.forced and "FORCED" in open(out, encoding="utf-8").read()
     doc.removeObject(forced.Name)
+    for obj in placed_model.objects_of(doc, placed_model.TYPE):
+        if obj.Calibration is failed:
+            doc.removeObject(obj.Name)
     doc.removeObject(failed.Name)
 
 
@@ -425,8 +464,9 @@ def test_10_commands_registered_and_guarded(step, output_dir):
     assert len([o for o in doc.Objects if o.TypeId == "Points::FeaturePython"]) == count + 1
 
 
-def test_11_preferences_page(step):
+def test_11_preferences_page(step, report, output_dir):
     from workcal_wb.fc import prefs
+    from workcal_wb.fc.inputs import options_from
     from workcal_wb.gui.commands.preferences import PreferencePage
 
     # The page is in FreeCAD's (modal) preferences dialog: look for it from a timer, then close the dialog.
@@ -437,12 +477,33 @@ def test_11_preferences_page(step):
             if isinstance(dialog, QtWidgets.QDialog) and dialog.isVisible():
                 page = dialog.findChild(QtWidgets.QWidget, "WorkCalPreferences")
                 seen.append(page is not None and page.findChild(QtWidgets.QDoubleSpinBox, "tolerance") is not None)
+                dialog.grab().save(os.path.join(str(output_dir), "11_preferences.png"))
                 dialog.reject()
 
     QtCore.QTimer.singleShot(1500, inspect_and_close)
     FreeCADGui.runCommand("WorkCal_Preferences")  # returns when the dialog is closed
     pump(0.1)
     assert seen and seen[0], "the WorkCal page was not in the preferences dialog"
+    assert "Cannot find icon" not in report.since()  # the page's icon (preferences-workcal) is there
+    page = PreferencePage()
+    page.loadSettings()
+    # "0" says what it means, and the report folder has a Browse button.
+    assert page.form.deviationRange.value() == 0 and page.form.deviationRange.text().startswith("automatic")
+    assert page.form.reportDir.placeholderText() and page.form.reportDirBrowse.text() == "Browse..."
+    chosen = []
+
+    def choose_folder():
+        dialog = QtWidgets.QApplication.activeModalWidget()
+        if isinstance(dialog, QtWidgets.QFileDialog):
+            dialog.setDirectory(str(output_dir))
+            chosen.append(True)
+            dialog.accept()
+        else:
+            QtCore.QTimer.singleShot(50, choose_folder)
+
+    QtCore.QTimer.singleShot(50, choose_folder)
+    page.form.reportDirBrowse.click()
+    assert chosen and os.path.samefile(page.form.reportDir.text(), str(output_dir))
 
     saved = prefs.all_values()
     try:
@@ -454,36 +515,36 @@ def test_11_preferences_page(step):
         page.saveSettings()
         assert prefs.get("ToleranceMm") == pytest.approx(0.25)
         assert prefs.get("Method") == "hausdorff" and prefs.get("ExportFormat") == "csv"
-        assert co.options_from().method == "hausdorff"  # what a new calibration starts with
+        assert options_from().method == "hausdorff"  # what a new calibration starts with
     finally:
         for name, value in saved.items():
             prefs.set(name, value)
 
 
-def test_12_double_click_reruns_with_new_options(step):
+def test_12_double_click_opens_the_result_and_redo_reruns(step):
+    from workcal_wb.gui.task_panels.guide import GuidePanel
+
     flow = step
     doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
     undo_before, before = doc.UndoCount, object_names(doc)
     assert cal.ViewObject.Proxy.doubleClicked(cal.ViewObject)
-    panel = FreeCADGui.Control.activeDialog() and _active_panel()
-    assert panel is not None and panel.calibration == cal
-    assert panel.tolerance_box.value() == pytest.approx(cal.Tolerance.Value)
-    panel.set_options(tolerance_mm=0.4)
-    ok = task_button("ok")
-    ok.click()
-    assert panel.wait(120) == "done", panel.last_error
+    guide = GuidePanel.current
+    assert guide is not None and FreeCADGui.Control.activeDialog() and guide.shown == "result"
+    assert guide.calibration() is cal
+    guide.steps["result"].redo_button.click()
+    page = guide.steps["calibrate"]
+    assert guide.shown == "calibrate" and page.tolerance.value() == pytest.approx(cal.Tolerance.Value)
+    assert page.start_button.text() == "Calibrate again"
+    page.set_options(tolerance_mm=0.4)
+    assert page.start()
+    assert page.wait(120) == "done", page.last_error
     assert object_names(doc) == before and doc.UndoCount == undo_before + 1  # the same object, one undo step
     assert cal.Tolerance.Value == pytest.approx(0.4) and co.result_of(cal).tolerance_mm == pytest.approx(0.4)
-    assert cal.Status == "ok"
-    assert_pose(matrix_of(cal.WMatrix), scene.W)
+    assert cal.Status == "ok" and guide.shown == "result"
+    assert_pose(matrix_of(cal.W), scene.W)
     doc.undo()
     assert cal.Tolerance.Value == pytest.approx(0.3)
-
-
-def _active_panel():
-    from workcal_wb.gui.task_panels.calibrate_panel import CalibratePanel
-
-    return CalibratePanel.current
+    guide.close()
 
 
 def test_14_study_plot_in_a_dialog(step, output_dir):
@@ -497,3 +558,46 @@ def test_14_study_plot_in_a_dialog(step, output_dir):
     assert window.dialog.isVisible() and not window.pixmap.isNull()
     window.dialog.grab().save(os.path.join(str(output_dir), "14_study_dialog.png"))
     window.dialog.close()
+
+
+def test_15_an_ambiguous_result_shows_its_poses_and_what_would_tell_them_apart(doc, shoot_window, page_fits):
+    """A symmetric workpiece (an ellipsoid): the result says AMBIGUOUS in orange, cannot be accepted, and the
+    poses the match found can be stepped through in the view with the sentence on the tie."""
+    from workcal_wb.core.simulate import shapes
+    from workcal_wb.fc.scan import make_scan
+    from workcal_wb.fc.setup import set_setup
+    from workcal_wb.gui.commands.guide import open_guide
+
+    scene = build_scene(shapes.ellipsoid(), seed=1)
+    scan = Scanner.aimed_at(scene).scan(scene)
+    set_setup(doc, scan=make_scan(doc, Cloud(scan.points, name="ellipsoid scan"), "Scan"),
+              workpiece=add_model(doc, scene.workpiece_model(), "Ellipsoid"),
+              reference=add_model(doc, scene.reference_model(), "Reference"))
+    doc.recompute()
+    guide = open_guide(doc, "calibrate")
+    page = guide.steps["calibrate"]
+    page.set_options(regions="Auto", seed=SEED, resamples=2)
+    assert page.start() and page.wait(180) == "done", page.last_error
+    result = guide.steps["result"]
+    cal = guide.calibration()
+    assert guide.shown == "result" and cal.Status == "ambiguous"
+    assert result.verdict.text().startswith("AMBIGUOUS") and "#d06000" in result.verdict.styleSheet()
+    assert not result.accept_button.isEnabled()
+    assert guide.states()["result"][0] == "attention"
+    assert result.poses.isVisible() and result.pose_label.text().startswith("Showing pose 1 of")
+    assert "symmetric" in result.tie.text()
+    page_fits(guide.form)
+    shoot_window("15_ambiguous_pose_1")
+    placed = placed_model.find(cal, "workpiece", placed_model.ON_SCAN)
+    first = matrix_of(placed.Placement)
+    result.next_pose.click()
+    pump(0.1)
+    poses = placed_model.candidate_poses(cal, "workpiece")
+    assert placed.Candidate == 1 and result.pose_label.text().startswith("Showing pose 2 of")
+    np.testing.assert_allclose(matrix_of(placed.Placement), poses[1] @ matrix_of(cal.Workpiece.Placement), atol=1e-6)
+    assert frames.rotation_between_deg(matrix_of(placed.Placement), first) > 90  # a clearly different pose
+    shoot_window("15_ambiguous_pose_2")
+    result.previous_pose.click()
+    assert placed.Candidate == 0
+    np.testing.assert_allclose(matrix_of(placed.Placement), first, atol=1e-9)
+    guide.close()

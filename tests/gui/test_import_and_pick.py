@@ -64,7 +64,7 @@ def imported(doc, scene, scan_units, pump):
     return obj
 
 
-def oblique_view(*objects):
+def oblique_view(*objects, angle=150):
     """``objects`` only, seen from beside the scanner (30 degrees off its axis), for screenshots with depth."""
     QtWidgets.QApplication.processEvents()
     FreeCADGui.Selection.clearSelection()
@@ -72,7 +72,7 @@ def oblique_view(*objects):
     for obj in objects[0].Document.Objects:
         if getattr(obj, "ViewObject", None) is not None:
             obj.ViewObject.Visibility = obj in objects
-    look(view, FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), 150))
+    look(view, FreeCAD.Rotation(FreeCAD.Vector(1, 0, 0), angle))
 
 
 def look_from_scanner():
@@ -83,14 +83,19 @@ def look_from_scanner():
 @pytest.fixture
 def open_pick_panel(settle):
     """Opens the pick panel and returns it once the 3D view has its final size (FreeCAD 1.x narrows
-    the view after the panel opens, which moves every point on the screen)."""
+    the view after the panel opens, which moves every point on the screen).  "Visible points only" is
+    off unless asked for: these tests check the projection of every point."""
 
-    def open_panel(obj, **options):
+    def open_panel(obj, visible_only=False, **options):
         panel = regions.open_pick_panel(obj, **options)
+        panel.visible_box.setChecked(visible_only)
         settle()
         return panel
 
-    return open_panel
+    yield open_panel
+    from workcal_wb.fc import prefs
+
+    prefs.set("PickVisibleOnly", 1)  # the default, whatever a test clicked
 
 
 
@@ -218,9 +223,10 @@ def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):
 # --- picking ----------------------------------------------------------------------------------
 
 def test_box_pick_selects_the_points_in_the_box(open_pick_panel, imported, scene, view_driver, shoot, pump,
-                                                assert_ok_cancel):
+                                                assert_ok_cancel, page_fits):
     panel = open_pick_panel(imported, shape="box")
     assert_ok_cancel(panel)
+    page_fits(panel.form)
     xy = screen_xy(fc_scan.scan_cloud(imported).points)
     start, end = workpiece_box(xy, scene["workpiece"])
     assert FreeCADGui.Control.activeDialog() and panel.tool.active
@@ -242,6 +248,27 @@ def test_box_pick_selects_the_points_in_the_box(open_pick_panel, imported, scene
     assert not FreeCADGui.Control.activeDialog() and not panel.tool.active
     view_driver.click(*start)  # the tool is gone: FreeCAD selects the scan again
     assert FreeCADGui.Selection.getSelection() == [imported]
+
+
+def test_visible_points_only_leaves_the_platform_behind_the_part(open_pick_panel, imported, scene, view_driver,
+                                                                 shoot):
+    """Seen from the far side of the platform, a box over the car covers the platform behind it too: with
+    "Visible points only" the pick is the car's points, without it it takes the hidden platform as well."""
+    picked = {}
+    for visible_only in (False, True):
+        oblique_view(imported, angle=210)
+        panel = open_pick_panel(imported, shape="box", visible_only=visible_only)
+        xy = screen_xy(fc_scan.scan_cloud(imported).points)
+        start, end = workpiece_box(xy, scene["workpiece"], 20, 80)
+        view_driver.drag(start, end)
+        picked[visible_only] = fc_scan.get_regions(imported)["workpiece"]
+        if visible_only:
+            shoot("11_visible_points_only")
+        panel.reject()
+    through, visible = (scene["workpiece"][picked[v]].mean() for v in (False, True))
+    assert through < 0.7, f"the view does not show the platform behind the car ({through:.0%} workpiece)"
+    assert visible > 0.9, f"only {visible:.0%} of the visible pick is workpiece"
+    assert np.isin(picked[True], picked[False]).all()
 
 
 def lasso_corners(start, end):
@@ -368,21 +395,27 @@ def test_regions_survive_save_and_reopen(open_pick_panel, imported, scene, view_
 
 # --- automatic regions and models --------------------------------------------------------------
 
-def test_choose_models_panel_and_automatic_regions(imported, scene, shoot, report, output_dir, pump,
-                                                  assert_ok_cancel):
+def test_choose_models_and_automatic_regions(imported, scene, shoot, report, output_dir, pump, page_fits):
+    from workcal_wb.gui.commands.guide import open_guide
+
     doc = imported.Document
     workpiece = add_model(doc, scene["scene"].workpiece_model(), "CarModel")
     reference = add_model(doc, scene["scene"].reference_model(), "ReferenceModel")
     doc.recompute()
-    panel = models.open_panel(doc)
-    assert_ok_cancel(panel)
-    assert panel.selected()["scan"] is imported  # the import made it the scan
-    panel.select("workpiece", workpiece)
-    panel.select("reference", reference)
+    FreeCADGui.runCommand("WorkCal_ChooseModels")  # the guide, at its models step
+    guide = open_guide(doc)
+    assert guide.shown == "models" and fc_setup.get_setup(doc)["scan"] is imported  # the import made it the scan
+    page = guide.steps["models"]
+    assert [page.combos["workpiece"].itemText(i) for i in range(page.combos["workpiece"].count())] == \
+        ["CarModel", "ReferenceModel"]  # models only: neither the scan nor WorkCal's own objects
     undo_before = doc.UndoCount
-    assert panel.accept()
+    page.select("workpiece", workpiece)
+    page.select("reference", reference)
     assert fc_setup.get_setup(doc) == {"scan": imported, "workpiece": workpiece, "reference": reference}
-    assert doc.UndoCount == undo_before + 1
+    assert doc.UndoCount == undo_before + 2 and doc.UndoNames[0] == "Choose models"
+    page_fits(guide.form)
+    guide.close()
+
     def progress_shown():
         return any(w.objectName() == "WorkCalProgress" and w.isVisible()
                    for w in QtWidgets.QApplication.topLevelWidgets())
@@ -415,17 +448,23 @@ def test_choose_models_panel_and_automatic_regions(imported, scene, shoot, repor
     assert fc_scan.get_regions(imported)["source"] == "auto"
 
 
-def test_models_from_files_and_cancel_removes_them(doc, tmp_path, scan_units):
+def test_models_from_files_are_chosen_and_undone(doc, tmp_path, scan_units):
     import Part
+
+    from workcal_wb.gui.commands.guide import open_guide
 
     scan_units.SetString("ScanUnits", "mm")
     Part.makeBox(30, 20, 10).exportStep(str(tmp_path / "block.step"))
     names_before = [o.Name for o in doc.Objects]
-    panel = models.open_panel(doc)
-    obj = panel.load_file("reference", tmp_path / "block.step")
-    assert panel.selected()["reference"] is obj and obj.TypeId == "Part::Feature"
-    panel.reject()
-    assert [o.Name for o in doc.Objects] == names_before and fc_setup.get_setup(doc)["reference"] is None
+    page = open_guide(doc, "models").steps["models"]
+    obj = page.load_file("reference", tmp_path / "block.step")
+    assert fc_setup.get_setup(doc)["reference"] is obj and obj.TypeId == "Part::Feature"
+    assert page.combos["reference"].currentText() == "block.step"
+    assert doc.UndoNames[:2] == ["Choose models", "Import model"]
+    doc.undo()
+    doc.undo()
+    assert [o.Name for o in doc.Objects if o.Name != "WorkCalSetup"] == names_before
+    assert fc_setup.get_setup(doc)["reference"] is None
 
 
 # --- bad input: a message, the document unchanged -------------------------------------------------
@@ -480,6 +519,8 @@ def test_auto_regions_with_the_wrong_model_names_it(imported, scene, report):
 
 
 def test_non_shape_model_reports_and_changes_nothing(imported, report, pump):
+    from workcal_wb.gui.commands.guide import open_guide
+
     doc = imported.Document
     sheet = doc.addObject("Spreadsheet::Sheet", "Notes")
     box = doc.addObject("Part::Box", "Block")
@@ -488,15 +529,15 @@ def test_non_shape_model_reports_and_changes_nothing(imported, report, pump):
     with pytest.raises(InputError, match=r"'Notes' \(Spreadsheet::Sheet\) is not a Part shape, mesh or point cloud"):
         models.choose_models(doc, workpiece=sheet)
     assert doc_state(doc) == state
-    panel = models.open_panel(doc)
-    assert panel.combos["workpiece"].findData("Notes") < 0, "a spreadsheet is not offered as a model"
-    panel.select("workpiece", box)
-    panel.select("reference", box)
-    assert panel.accept() is False  # refused: the panel stays open
+    guide = open_guide(doc, "models")
+    page = guide.steps["models"]
+    assert page.combos["workpiece"].findData("Notes") < 0, "a spreadsheet is not offered as a model"
+    page.select("workpiece", box)
+    report.mark()
+    page.run_guarded("Choose models", lambda: page.select("reference", box))
     assert "cannot be both the workpiece and the reference model" in report.since()
-    assert FreeCADGui.Control.activeDialog()
-    panel.reject()
-    assert doc_state(doc) == state
+    assert guide.alive() and fc_setup.get_setup(doc)["reference"] is None  # refused, the guide still open
+    guide.close()
 
 
 def test_bad_scan_file_reports_and_changes_nothing(doc, tmp_path, report, scan_units):

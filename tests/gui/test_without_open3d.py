@@ -111,29 +111,31 @@ def test_workbench_activates_with_every_command(without_open3d, workbench, pump)
 
 
 def test_calibrate_entry_point_says_what_to_install(without_open3d, setup_doc):
-    from workcal_wb.gui.commands.calibrate import calibrate
+    from workcal_wb.fc.calibration_object import make_calibration
 
     before = state(setup_doc)
     with pytest.raises(MissingDependency, match=INSTALL):
-        calibrate(setup_doc, regions="Auto")
+        make_calibration(setup_doc, regions="Auto")
     assert state(setup_doc) == before
 
 
-def test_calibrate_command_shows_it_in_the_panel_and_report_view(without_open3d, setup_doc, report):
-    from workcal_wb.gui.task_panels.calibrate_panel import CalibratePanel
+def test_calibrate_command_shows_it_in_the_guide_and_report_view(without_open3d, setup_doc, report):
+    from workcal_wb.gui.task_panels.guide import GuidePanel
 
     before = state(setup_doc)
     FreeCADGui.runCommand("WorkCal_Calibrate")
-    panel = CalibratePanel.current
-    assert panel is not None and panel.doc.Name == setup_doc.Name and FreeCADGui.Control.activeDialog()
-    panel.set_options(regions="Auto", seed=0)
-    assert panel.start()
-    assert panel.wait(60) == "failed"
-    assert INSTALL in panel.last_error and INSTALL in panel.status_label.text()
+    guide = GuidePanel.current
+    assert guide is not None and guide.doc.Name == setup_doc.Name and FreeCADGui.Control.activeDialog()
+    assert guide.shown == "calibrate"
+    page = guide.steps["calibrate"]
+    page.set_options(regions="Auto", seed=0)
+    assert page.start()
+    assert page.wait(60) == "failed"
+    assert INSTALL in page.last_error and INSTALL in page.message.text()
     text = report.since()
     assert INSTALL in text and "Traceback" not in text
-    assert FreeCADGui.Control.activeDialog()  # open, so the user reads why
-    panel.reject()
+    assert FreeCADGui.Control.activeDialog() and guide.shown == "calibrate"  # open, so the user reads why
+    assert guide.reject()
     assert not FreeCADGui.Control.activeDialog()
     assert state(setup_doc) == before
 

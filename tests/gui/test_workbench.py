@@ -15,7 +15,16 @@ from workcal_wb.gui import commands  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets  # noqa: E402
 from workcal_wb.gui.view import without_animation  # noqa: E402
 
-TREE_ICONS = ("WorkCal_Scan", "WorkCal_Calibration", "WorkCal_Setup")
+
+def tree_icons() -> list:
+    """The icon of every view provider in the registry, and the preference page's."""
+    import importlib
+
+    from workcal_wb.gui.view_providers import REGISTRY
+
+    icons = [getattr(importlib.import_module(module), cls).ICON
+             for module, cls in (target.split(":") for target in REGISTRY.values())]
+    return icons + ["preferences-workcal"]
 
 
 def names(entries):
@@ -91,7 +100,7 @@ def test_menu_shows_every_command_in_order(workbench):
 
 
 def test_every_icon_file_exists_and_renders(workbench):
-    paths = [workcal_wb.icon("WorkCal")] + [workcal_wb.icon(n) for n in TREE_ICONS]
+    paths = [workcal_wb.icon("WorkCal")] + [workcal_wb.icon(n) for n in tree_icons()]
     for name, command in commands.commands().items():
         resources = command.GetResources()
         assert resources["Pixmap"] == workcal_wb.icon(name), "icon named after its command"
@@ -150,6 +159,24 @@ def test_screenshots_of_the_main_window_and_the_3d_view(doc, shoot, output_dir, 
     assert np.allclose(tuple(view.getViewDirection()), isometric, atol=1e-6), "the view kept turning"
     assert np.allclose(np.abs(isometric), 3 ** -0.5, atol=1e-3), "not an isometric view"
     window = FreeCADGui.getMainWindow()
+    # After a task dialog closes, the tree is in front again (FreeCAD 1.x left the Tasks tab in front).
+    from workcal_wb.gui.commands.guide import open_guide
+
+    def front_tab():
+        """The tab in front of the Model/Tasks pair: the combo view's (0.20) or the tabbed docks' (1.x)."""
+        texts = lambda bar: [bar.tabText(i).replace("&", "") for i in range(bar.count())]  # noqa: E731
+        [bar] = [b for b in window.findChildren(QtWidgets.QTabBar) if b.isVisible() and {"Model", "Tasks"} <= set(texts(b))]
+        return texts(bar)[bar.currentIndex()]
+
+    open_guide(doc)
+    pump(0.2)
+    assert FreeCADGui.Control.activeDialog() and front_tab() == "Tasks"
+    [close] = [b for box in window.findChildren(QtWidgets.QDialogButtonBox) if box.isVisible()
+               for b in [box.button(QtWidgets.QDialogButtonBox.Close)] if b is not None]
+    close.click()  # as the user closes it
+    pump(0.3)
+    assert not FreeCADGui.Control.activeDialog() and obj.ViewObject.Visibility  # a scan to choose stays in sight
+    assert front_tab() == "Model"
     pump(0.2)
     window_path = output_dir / "main_window.png"
     assert window.grab().save(str(window_path))

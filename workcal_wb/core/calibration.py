@@ -31,6 +31,9 @@ class CalibrationOptions:
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
     seed: int = 0
+    # OpenBLAS threads while matching (pointops.blas_threads): one is fastest; None leaves the process's
+    # setting alone (FreeCAD's worker threads: the GUI thread goes on using numpy meanwhile).
+    blas_threads: int | None = 1
     # Where the scanner stood and which way is up, in the scan's frame (mm; a direction), when the user
     # knows; otherwise the scan's file tells the scanner's position, or both come from the data.
     scanner_origin: tuple | None = None
@@ -86,7 +89,8 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     workpiece_surface, reference_surface = surfaces
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
-    match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed)
+    match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed,
+                         blas_threads=options.blas_threads)
     if scanner_origin(scan, options) is not None:  # the matches judge their views from where the scanner stood
         match_options["viewpoint"] = tuple(scanner_origin(scan, options))
     warnings = list(scan.warnings)
@@ -95,7 +99,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         try:
             found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
                            progress=lambda f, m: report(0.6 * f, m), up=options.up,
-                           viewpoint=scanner_origin(scan, options))
+                           viewpoint=scanner_origin(scan, options), blas_threads=options.blas_threads)
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
             return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
                                      tolerance_mm=options.tolerance_mm, seed=options.seed,

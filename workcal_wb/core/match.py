@@ -58,6 +58,7 @@ class MatchOptions:
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
     max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
     seed: int = 0
+    blas_threads: int | None = 1  # OpenBLAS threads while matching (pointops.blas_threads); None: leave them
 
 
 COARSE_VOXELS_PER_DIAGONAL = 40
@@ -138,7 +139,7 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
     with status "failed" or "ambiguous" and the reasons.
     """
     options = _checked_options(replace(options, **overrides))
-    with pointops.single_threaded_blas():
+    with pointops.blas_threads(options.blas_threads):
         return _match(scan, model, init, options)
 
 

@@ -1,6 +1,7 @@
 """Point-set operations the matcher builds on: spacing, voxel grids, normals, surface sampling."""
 from __future__ import annotations
 
+import threading
 from contextlib import contextmanager
 from functools import lru_cache
 
@@ -10,26 +11,41 @@ from scipy.spatial import cKDTree
 from .errors import require_open3d
 
 
+_blas_lock = threading.Lock()
+_blas_users = 0  # blocks inside blas_threads, in any thread
+_blas_before = None  # OpenBLAS's thread count before the first of them
+
+
 @contextmanager
-def single_threaded_blas():
-    """Run the block with OpenBLAS on one thread, then restore its setting; a no-op with any other
-    BLAS.
+def blas_threads(count: int | None):
+    """Run the block with OpenBLAS on ``count`` threads; ``None`` leaves it as it is.  A no-op with any
+    other BLAS.
 
     The matcher's matrix products are small or few: OpenBLAS's threads would only spin after each
     one and take the cores that open3d's OpenMP threads need for the features (measured on 2 cores:
-    matches 10-25 % faster single-threaded, even with the feature matrix product on one thread).
-    This is what threadpoolctl does, without the dependency.
+    matches 10-25 % faster single-threaded), so headless runs ask for 1 (``MatchOptions.blas_threads``).
+    OpenBLAS has one setting for the whole process: blocks that overlap (matches in several
+    threads) share it; the first one sets it and the last one to leave puts back what was there
+    before, so no order of entering and leaving leaves it changed.  This is what threadpoolctl does,
+    without the dependency.
     """
-    blas = _openblas()
+    global _blas_users, _blas_before
+    blas = _openblas() if count is not None else None
     if blas is None:
         yield
         return
-    before = blas.openblas_get_num_threads()
-    blas.openblas_set_num_threads(1)
+    with _blas_lock:
+        if _blas_users == 0:
+            _blas_before = blas.openblas_get_num_threads()
+            blas.openblas_set_num_threads(int(count))
+        _blas_users += 1
     try:
         yield
     finally:
-        blas.openblas_set_num_threads(before)
+        with _blas_lock:
+            _blas_users -= 1
+            if _blas_users == 0:
+                blas.openblas_set_num_threads(_blas_before)
 
 
 @lru_cache(maxsize=1)

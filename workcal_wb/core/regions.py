@@ -79,19 +79,21 @@ class Located:
 
 
 def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0, up=None,
-                 viewpoint=None) -> dict:
+                 viewpoint=None, blas_threads: int | None = 1) -> dict:
     """The workpiece, reference and platform regions of ``scan`` as index arrays (see ``locate``)."""
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, seed) for m in (workpiece, reference)]
-    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed, up=up, viewpoint=viewpoint).as_dict()
+    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed, up=up, viewpoint=viewpoint,
+                  blas_threads=blas_threads).as_dict()
 
 
 def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
-           seed: int = 0, progress=None, up=None, viewpoint=None) -> Located:
+           seed: int = 0, progress=None, up=None, viewpoint=None, blas_threads: int | None = 1) -> Located:
     """Find the reference and the workpiece in a scene scan; NotFound names what could not be found
     and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise).
 
     The scan may be in any frame: ``up`` (a direction) and ``viewpoint`` (the scanner's position),
-    when known, say which side of the platform the objects stand on; otherwise the data do."""
+    when known, say which side of the platform the objects stand on; otherwise the data do.
+    ``blas_threads``: as in MatchOptions."""
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
@@ -116,6 +118,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
+                                                           blas_threads=blas_threads,
                                                            viewpoint=None if viewpoint is None else tuple(viewpoint)))
     try:
         found = _in_turn(objects, ("reference", "workpiece"), report, **context)

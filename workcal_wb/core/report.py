@@ -9,7 +9,8 @@ Both are built completely in memory and then written atomically, report.html las
 leaves the previous report (or none), never half a file.
 
 The deviation map shows the workpiece scan region against its model X-A placed by U: signed
-distance to the model surface, positive outside (clay added), negative inside (clay carved).
+distance to the model surface, positive outside (clay added), negative inside (clay carved), in the
+colours of ``deviation.DeviationScale`` (the same as FreeCAD's deviation map).
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ import numpy as np
 
 from . import frames
 from .atomic import atomic_write_text
-from .deviation import deviation_stats, signed_deviations
+from .deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, DeviationScale, deviation_stats, signed_deviations
 from .errors import OutputError
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult
 
@@ -62,16 +63,20 @@ img{max-width:100%;border:1px solid #ddd}code{font-family:ui-monospace,Menlo,Con
 
 
 def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=None, workpiece_model=None,
-                 studies=(), title: str = "WorkCal calibration") -> dict:
+                 studies=(), title: str = "WorkCal calibration", deviation_scale: DeviationScale | None = None) -> dict:
     """Write report.html and report.json into ``out_dir`` (created if missing); return their paths.
 
     workpiece_points: the workpiece region of the scan (N x 3, mm, in S) for the deviation map;
     workpiece_model: X-A (Cloud or SurfaceModel); studies: StudyResults (or their dicts) whose
-    summaries, targets and figures are added.  Raises OutputError if the folder cannot be written.
+    summaries, targets and figures are added; deviation_scale: the map's colours (default: the
+    calibration's tolerance).  Raises OutputError if the folder cannot be written.
     """
     out = Path(out_dir)
+    scale = deviation_scale or DeviationScale.for_tolerance(calibration.tolerance_mm)
     deviations = deviation_map(calibration, workpiece_points, workpiece_model)
     deviation = deviation_summary(deviations, calibration.tolerance_mm) if deviations is not None else None
+    if deviation is not None:
+        deviation["colour_scale"] = scale.to_dict()
     study_dicts = [_study_dict(s) for s in studies]
     generated = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
 
@@ -82,8 +87,8 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
                       "files": {"html": HTML_NAME, "json": JSON_NAME}}
     images = {}
     if deviations is not None:
-        images["map"] = _png(deviation_figure(deviations, calibration, workpiece_points, workpiece_model))
-        images["histogram"] = _png(histogram_figure(deviations, calibration.tolerance_mm))
+        images["map"] = _png(deviation_figure(deviations, calibration, workpiece_points, workpiece_model, scale))
+        images["histogram"] = _png(histogram_figure(deviations, scale))
     page = _page(title, generated, _calibration_body(calibration, deviation, images, workpiece_points is not None
                                                      and workpiece_model is not None)
                  + _studies_body(studies, study_dicts))
@@ -129,16 +134,20 @@ def deviation_summary(deviations: np.ndarray, tolerance_mm: float) -> dict:
     return stats
 
 
-def _colour_limit(deviations: np.ndarray, tolerance: float) -> float:
-    d = np.abs(deviations[np.isfinite(deviations)])
-    return float(max(tolerance, np.percentile(d, 99.5) if len(d) else tolerance))
-
-
-def deviation_figure(deviations, calibration, workpiece_points, workpiece_model):
-    """Two orthographic views of the workpiece in its model frame (along the model's principal axes:
-    seen from above and from the side), scan points coloured by signed deviation, model in grey."""
+def colour_map(scale: DeviationScale):
+    """The scale as a matplotlib colour map and norm: the same colours as FreeCAD's deviation map."""
     from matplotlib import colors
 
+    cmap = colors.ListedColormap(scale.colours(np.linspace(-scale.limit_mm, scale.limit_mm, 601)))
+    cmap.set_over(BEYOND_ADDED)
+    cmap.set_under(BEYOND_REMOVED)
+    cmap.set_bad(NO_SURFACE)
+    return cmap, colors.Normalize(vmin=-scale.limit_mm, vmax=scale.limit_mm)
+
+
+def deviation_figure(deviations, calibration, workpiece_points, workpiece_model, scale: DeviationScale):
+    """Two orthographic views of the workpiece in its model frame (along the model's principal axes:
+    seen from above and from the side), scan points coloured by signed deviation, model in grey."""
     from .studies.common import new_figure
 
     points = frames.apply(frames.invert(calibration.U), np.asarray(workpiece_points, dtype=float).reshape(-1, 3))
@@ -154,8 +163,7 @@ def deviation_figure(deviations, calibration, workpiece_points, workpiece_model)
     outline = model_points if len(model_points) <= MAX_OUTLINE_POINTS else \
         model_points[rng.choice(len(model_points), MAX_OUTLINE_POINTS, False)]
     outline = (outline - centre) @ axes.T
-    limit = _colour_limit(deviations, calibration.tolerance_mm)
-    norm = colors.TwoSlopeNorm(vmin=-limit, vcenter=0.0, vmax=limit)
+    cmap, norm = colour_map(scale)
     fig = new_figure(11.0, 4.2)
     views = fig.subplots(1, 2)
     mappable = None
@@ -173,32 +181,29 @@ def deviation_figure(deviations, calibration, workpiece_points, workpiece_model)
         order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
         far = order[~np.isfinite(d[order])]
         near = order[np.isfinite(d[order])]
-        ax.scatter(seen[far, h], seen[far, v], s=2, color="#888888", linewidths=0)
-        mappable = ax.scatter(seen[near, h], seen[near, v], c=d[near], cmap="RdBu_r", norm=norm, s=3, linewidths=0)
+        ax.scatter(seen[far, h], seen[far, v], s=2, color=NO_SURFACE, linewidths=0)
+        mappable = ax.scatter(seen[near, h], seen[near, v], c=d[near], cmap=cmap, norm=norm, s=3, linewidths=0)
         ax.set_aspect("equal")
         ax.set_title(name)
         ax.set_xlabel(f"principal axis {h + 1} of X-A (mm)")
         ax.set_ylabel(f"principal axis {v + 1} of X-A (mm)")
-    bar = fig.colorbar(mappable, ax=list(views), shrink=0.85)
-    bar.set_label("signed deviation (mm): + clay added, - clay removed")
+    bar = fig.colorbar(mappable, ax=list(views), shrink=0.85, extend="both", ticks=scale.ticks())
+    bar.set_label(f"signed deviation (mm): + clay added, - clay removed; green within +/- {scale.tolerance_mm:g} mm")
     return fig
 
 
-def histogram_figure(deviations, tolerance_mm: float):
+def histogram_figure(deviations, scale: DeviationScale):
     """Histogram of signed deviations (log count), bars coloured like the map, tolerance band marked."""
-    from matplotlib import colormaps, colors
-
     from .studies.common import new_figure
 
+    tolerance_mm = scale.tolerance_mm
     d = deviations[np.isfinite(deviations)]
     fig = new_figure(8.0, 3.6)
     ax = fig.subplots()
     if len(d):
         counts, edges = np.histogram(d, bins=HISTOGRAM_BINS)
-        limit = _colour_limit(deviations, tolerance_mm)
-        norm = colors.TwoSlopeNorm(vmin=-limit, vcenter=0.0, vmax=limit)
         middles = 0.5 * (edges[1:] + edges[:-1])
-        ax.bar(middles, counts, width=np.diff(edges), color=colormaps["RdBu_r"](norm(middles)), edgecolor="#555",
+        ax.bar(middles, counts, width=np.diff(edges), color=scale.colours(middles), edgecolor="#555",
                linewidth=0.3)
         ax.set_yscale("log")
     for x in (-tolerance_mm, tolerance_mm):
@@ -351,8 +356,11 @@ def _deviation_html(deviation, images, asked: bool) -> str:
                  [f"within +/- {deviation['tolerance_mm']:g} mm", f"{deviation['within_tolerance_pct']:.1f} %"],
                  ["above the tolerance (added)", f"{deviation['above_tolerance_pct']:.2f} %"],
                  ["below the tolerance (removed)", f"{deviation['below_tolerance_pct']:.2f} %"]]
-    out = ("<p>Signed distance of the workpiece scan points to the model X-A placed by U: red is outside the model "
-           "(clay added since the model was made), blue inside (clay removed), white on the surface.</p>"
+    scale = deviation.get("colour_scale") or {}
+    out = ("<p>Signed distance of the workpiece scan points to the model X-A placed by U: green within the tolerance, "
+           "yellow to red outside the model (clay added since the model was made), cyan to blue inside (clay "
+           f"removed), full colour at +/- {_num(scale.get('limit_mm'))} mm; grey points have no model surface "
+           "near them. FreeCAD's deviation map uses the same colours.</p>"
            + _table(rows))
     if "map" in images:
         out += f'<img alt="deviation colour map" src="data:image/png;base64,{images["map"]}">'

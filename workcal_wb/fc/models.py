@@ -80,8 +80,12 @@ def deflection_for(shape) -> float:
     return float(min(high, max(low, DEFLECTION_FRACTION * shape.BoundBox.DiagonalLength)))
 
 
-def model_cloud(obj, deflection_mm: float | None = None) -> Cloud:
-    """The model as a Cloud in mm: triangles for shapes and meshes, points for point clouds."""
+def model_cloud(obj, deflection_mm: float | None = None, role: str = "") -> Cloud:
+    """The model as a Cloud in mm: triangles for shapes and meshes, points for point clouds.  ``role``
+    ("workpiece", "reference") names what is missing when ``obj`` is None."""
+    if obj is None:
+        raise InputError(f"no {role + ' ' if role else ''}model given: choose it first (WorkCal > Choose models; "
+                         "a Part shape, mesh or point cloud)")
     kind = check_model(obj)
     data = kind_of(obj)[1]
     label = _label(obj)
@@ -137,6 +141,16 @@ def import_model_file(doc, path, units: str = "mm", name: str | None = None):
         for warning in cloud.warnings:
             FreeCAD.Console.PrintWarning(f"WorkCal: {warning}\n")
     obj.Label = label
+    return obj
+
+
+def import_model(doc, path, units: str = "mm"):
+    """The use case behind "Model from file": ``import_model_file`` as one undo step, recomputed."""
+    from workcal_wb.fc.undo import transaction
+
+    with transaction(doc, FreeCAD.Qt.translate("WorkCal", "Import model")):
+        obj = import_model_file(doc, path, units)
+        doc.recompute()
     return obj
 
 

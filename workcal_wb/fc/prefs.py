@@ -28,6 +28,7 @@ DEFAULTS = {
     "ExportFormat": ("string", "krl"),
     "DeviationRangeMm": ("float", 0.0),  # 0 = from the data
     "ReportDir": ("string", ""),  # "" = a folder beside the document (or the temp folder)
+    "PickVisibleOnly": ("int", 1),  # box and lasso picks take only the points not hidden by others
 }
 
 

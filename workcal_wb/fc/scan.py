@@ -18,6 +18,10 @@ serve as a scan too: the region properties are added to it when first set.
 Coordinates: ``scan_cloud`` returns the points as FreeCAD's kernel gives them, i.e. with the
 object's own ``Placement`` applied (normally the identity for a scan).  That frame is the scan frame
 S of the calibration.
+
+``import_scan`` is the File > Import use case (read, add, make it the document's scan, one undo
+step); the GUI reads big files in a worker thread first with ``read_scan_file``, which remembers the
+last file it read, so the command it then records and runs (replayable headless) reads nothing twice.
 """
 from __future__ import annotations
 
@@ -32,39 +36,43 @@ from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.units import extent_warnings, mm_per_unit
-from workcal_wb.fc import init as fc_init
+from workcal_wb.fc.memo import LastResult
 from workcal_wb.fc.placements import matrix_of
-from workcal_wb.fc.proxies import Proxy
+from workcal_wb.fc.proxies import Feature, type_of
+from workcal_wb.fc.undo import transaction
 
 PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
-SCAN_TYPE = "WorkCal::Scan"
+TYPE = "WorkCal::Scan"
+QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 REGION_SOURCES = ["none", "user", "auto"]
 # Region properties, also added to foreign Points/Mesh objects used as scans.
-WORKPIECE_PROP, REFERENCE_PROP, SOURCE_PROP = "WorkpieceRegion", "ReferenceRegion", "RegionSource"
-WORKPIECE_COUNT_PROP, REFERENCE_COUNT_PROP = "WorkpiecePoints", "ReferencePoints"
+WORKPIECE_PROP, REFERENCE_PROP, SOURCE_PROP = "WorkpieceRegion", "ReferenceRegion", "Source"
+# Shown in the property editor: short names (they must fit its first column), the group says "Regions".
+WORKPIECE_COUNT_PROP, REFERENCE_COUNT_PROP = "Workpiece", "Reference"
+# What WorkCal 0.1 called the shown ones (scans it saved are brought up to date when reopened).
+OLD_REGION_PROPS = {"RegionSource": SOURCE_PROP, "WorkpiecePoints": None, "ReferencePoints": None}
 REGION_GROUP = "Regions"
 # Files read by FreeCAD's Points module instead of workcal_wb.core.readers.
 FREECAD_POINT_FORMATS = (".e57",)
 SCAN_EXTENSIONS = (".ply", ".pcd", ".xyz", ".asc", ".pts", ".csv", ".txt", ".e57", ".stl", ".obj", ".off")
 
 
-class ScanFeature(Proxy):
+class ScanFeature(Feature):
     """Proxy of a WorkCal scan; caches the numpy cloud (never saved)."""
 
-    Type = SCAN_TYPE
-    STATE = {"Type": SCAN_TYPE}
+    TYPE = TYPE
+    _cloud = None
 
-    def __init__(self, obj):
-        obj.Proxy = self
-        self._cloud = None
-        obj.addProperty("App::PropertyString", "Units", "Scan", "Length unit the file was read in; "
-                        "the points are stored in mm", 0, True)
-        obj.addProperty("App::PropertyString", "SourceFile", "Scan", "File the scan was read from", 0, True)
-        obj.addProperty("App::PropertyInteger", "PointCount", "Scan", "Number of points", 0, True)
+    def setup(self, obj) -> None:
+        for name, tip in (("Units", QT_TRANSLATE_NOOP("App::Property", "Length unit the file was read in; the "
+                                                                       "points are stored in mm")),
+                          ("SourceFile", QT_TRANSLATE_NOOP("App::Property", "File the scan was read from"))):
+            if name not in obj.PropertiesList:
+                obj.addProperty("App::PropertyString", name, "Scan", tip, 0, True)
+        if "PointCount" not in obj.PropertiesList:
+            obj.addProperty("App::PropertyInteger", "PointCount", "Scan",
+                            QT_TRANSLATE_NOOP("App::Property", "Number of points"), 0, True)
         _add_region_properties(obj)
-
-    def execute(self, obj):
-        pass
 
     def onChanged(self, obj, prop):
         if prop in ("Points", "Placement"):
@@ -72,14 +80,22 @@ class ScanFeature(Proxy):
 
     def onDocumentRestored(self, obj):
         self._cloud = None
-
-    def __setstate__(self, state):
-        self._cloud = None
+        source = obj.RegionSource if "RegionSource" in obj.PropertiesList else None
+        for name in OLD_REGION_PROPS:
+            if name in obj.PropertiesList:
+                obj.removeProperty(name)
+        super().onDocumentRestored(obj)
+        if source in ("user", "auto"):
+            try:
+                set_regions(obj, getattr(obj, WORKPIECE_PROP), getattr(obj, REFERENCE_PROP), source=source)
+            except InputError:  # stale regions: said when they are used
+                pass
+            obj.purgeTouched()
 
 
 def is_scan(obj) -> bool:
     """A WorkCal scan object (made by ``make_scan``)."""
-    return getattr(getattr(obj, "Proxy", None), "Type", None) == SCAN_TYPE
+    return type_of(obj) == TYPE
 
 
 def can_be_scan(obj) -> bool:
@@ -128,7 +144,6 @@ def make_scan(doc, cloud: Cloud, name: str = "Scan", units: str = "mm", source: 
         obj.Normal = list(map(tuple, normals.tolist()))
     obj.PointCount = len(points)
     proxy._cloud = Cloud(points, normals, None, obj.Label, list(cloud.warnings))
-    fc_init.attach_view_provider(obj, "Scan")
     return obj
 
 
@@ -145,6 +160,8 @@ def scan_cloud(obj) -> Cloud:
     property) and Mesh objects (their vertices).  The arrays are copies: changing them does not
     change the object.
     """
+    if obj is None:
+        raise InputError("no scan given: import a scan first (WorkCal > Import scan)")
     kind, kernel = kernel_of(obj)
     label = getattr(obj, "Label", repr(obj))
     if kind is None:
@@ -177,21 +194,24 @@ def _normals(obj, count: int):
 
 # --- regions -------------------------------------------------------------------------------------
 
+REGION_PROPERTIES = [
+    ("App::PropertyIntegerList", WORKPIECE_PROP, "Indices of the scan points on the workpiece"),
+    ("App::PropertyIntegerList", REFERENCE_PROP, "Indices of the scan points on the reference object"),
+    ("App::PropertyEnumeration", SOURCE_PROP, "Who set the regions: picked by the user (user) or found "
+                                              "automatically (auto)"),
+    ("App::PropertyInteger", WORKPIECE_COUNT_PROP, "Number of points in the workpiece region"),
+    ("App::PropertyInteger", REFERENCE_COUNT_PROP, "Number of points in the reference region"),
+]
+
+
 def _add_region_properties(obj) -> None:
-    if hasattr(obj, SOURCE_PROP):
-        return
-    obj.addProperty("App::PropertyIntegerList", WORKPIECE_PROP, REGION_GROUP,
-                    "Indices of the scan points on the workpiece")
-    obj.addProperty("App::PropertyIntegerList", REFERENCE_PROP, REGION_GROUP,
-                    "Indices of the scan points on the reference object")
-    obj.addProperty("App::PropertyEnumeration", SOURCE_PROP, REGION_GROUP,
-                    "Who set the regions: picked by the user or found automatically", 0, True)
-    setattr(obj, SOURCE_PROP, REGION_SOURCES)
-    obj.addProperty("App::PropertyInteger", WORKPIECE_COUNT_PROP, REGION_GROUP,
-                    "Number of points in the workpiece region", 0, True)
-    obj.addProperty("App::PropertyInteger", REFERENCE_COUNT_PROP, REGION_GROUP,
-                    "Number of points in the reference region", 0, True)
-    # Long index lists are unreadable in the property editor; the counts above stand for them.
+    for kind, name, tip in REGION_PROPERTIES:
+        if name not in obj.PropertiesList:
+            read_only = name not in (WORKPIECE_PROP, REFERENCE_PROP)
+            obj.addProperty(kind, name, REGION_GROUP, tip, 0, read_only)
+            if name == SOURCE_PROP:
+                setattr(obj, SOURCE_PROP, REGION_SOURCES)
+    # Long index lists are unreadable in the property editor; the counts stand for them.
     obj.setEditorMode(WORKPIECE_PROP, 2)
     obj.setEditorMode(REFERENCE_PROP, 2)
 
@@ -295,16 +315,31 @@ def declared_units(path) -> str | None:
     return None
 
 
+_last_read = LastResult()
+
+
 def read_scan_file(path, units: str = "mm") -> Cloud:
     """A scan file as a checked Cloud in mm.  ``units`` is the file's unit; a PLY that declares its
     unit is read in that unit (E57: metres).  E57 goes through FreeCAD's Points module (touches documents, so call
-    it from the main thread); everything else through workcal_wb.core.readers (thread-safe)."""
+    it from the main thread); everything else through workcal_wb.core.readers (thread-safe).  The last
+    file read is remembered (by path, size, time and unit), so reading it again costs nothing."""
     path = str(path)
     ext = os.path.splitext(path)[1].lower()
-    declared = declared_units(path)
-    if ext in FREECAD_POINT_FORMATS:
-        return _read_with_freecad(path, declared or units)
-    return read_cloud(path, units=None if declared else units)
+    mm_per_unit(units)
+    try:
+        stat = os.stat(path)
+        key = (os.path.abspath(path), stat.st_size, stat.st_mtime_ns, units)
+    except OSError:
+        key = None
+    cloud = _last_read.get(key)
+    if cloud is None:
+        declared = declared_units(path)
+        if ext in FREECAD_POINT_FORMATS:
+            cloud = _read_with_freecad(path, declared or units)
+        else:
+            cloud = read_cloud(path, units=None if declared else units)
+        _last_read.put(key, cloud)
+    return cloud
 
 
 def _read_with_freecad(path: str, units: str) -> Cloud:
@@ -334,7 +369,18 @@ def _read_with_freecad(path: str, units: str) -> Cloud:
 
 
 def import_scan(doc, path, units: str = "mm", name: str | None = None):
-    """Read a scan file and add it to ``doc`` as a WorkCal scan (no transaction: the caller's job)."""
+    """Read a scan file into ``doc`` as a WorkCal scan and make it the document's scan (WorkCal setup),
+    in one undo step; returns the new object.  InputError names the file when it cannot be read; the
+    document is then unchanged.  Warnings about the file (e.g. its extent and unit) go to the Report view."""
+    from workcal_wb.fc.setup import set_setup
+
     cloud = read_scan_file(path, units)
     used = declared_units(path) or units
-    return make_scan(doc, cloud, name or os.path.basename(str(path)), used, str(path))
+    with transaction(doc, FreeCAD.Qt.translate("WorkCal", "Import scan")):
+        obj = make_scan(doc, cloud, name or os.path.basename(str(path)), used, str(path))
+        set_setup(doc, scan=obj)
+        doc.recompute()
+    for text in cloud.warnings:
+        FreeCAD.Console.PrintWarning(f"WorkCal: {text}\n")
+    FreeCAD.Console.PrintMessage(f"WorkCal: imported {obj.Label} ({len(cloud)} points, read as {used})\n")
+    return obj

@@ -1,29 +1,85 @@
-"""FreeCAD Path/CAM toolpaths in, calibrated Path objects and Robot trajectories out.
+"""Toolpaths: FreeCAD Path/CAM Jobs and G-code files in; the calibrated toolpath, robot programs and
+Robot trajectories out.
 
 Reading is duck-typed on what FreeCAD 0.20 (``Path``, ``PathScripts``) and 1.x (``CAM``, ``Path.Main``)
 share: a Job has ``Operations.Group``; an operation or ``Path::Feature`` has ``.Path.Commands``.  So no
 version switch is needed here; only creating Jobs (tests, GUI) has to pick ``PathScripts.PathJob`` or
 ``Path.Main.Job``.  FreeCAD stores feeds in mm/s: they are converted to the core's mm/min both ways.
+
+A *source* is what the setup remembers as the document's toolpath (``fc.setup.toolpath_of``): a Job,
+an operation or Path object, or a G-code file path.  ``make_calibrated_path`` shows it carried into
+the robot base frame B by a calibration's W (a ``Path::FeaturePython`` that follows the calibration),
+``export_program`` writes it as a robot or CNC program: both go through the same safety checks.
 """
 from __future__ import annotations
 
+import os
+
+import numpy as np
+
+import FreeCAD
 import Path
 
 from workcal_wb.core.errors import InputError, MissingDependency
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, Envelope, ExportOptions, RotaryTable, Toolpath, parse_gcode,
-                                      transformed)
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, RAPID, Envelope, ExportOptions, RotaryTable,
+                                      Toolpath, export, format_for, linearised, parse_gcode, read_gcode, transformed)
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, robot_path
 from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES
 from workcal_wb.core.toolpath.model import ARC_CCW, ARC_CW, KINDS
 from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
 from workcal_wb.fc.placements import placement
+from workcal_wb.fc.proxies import Feature, add_properties, objects_of, type_of
+from workcal_wb.fc.undo import transaction
+
+translate = FreeCAD.Qt.translate
+QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
 SECONDS_PER_MINUTE = 60.0
+MOTION = ("G0", "G1", "G2", "G3", "G00", "G01", "G02", "G03")
+TYPE = "WorkCal::CalibratedPath"
 
 
 def is_job(obj) -> bool:
     return hasattr(obj, "Operations") and hasattr(obj.Operations, "Group")
+
+
+def jobs(doc) -> list:
+    """The document's Path/CAM Jobs."""
+    return [o for o in doc.Objects if is_job(o)]
+
+
+def toolpath_sources(doc) -> list:
+    """What can be a document's toolpath: Jobs first, then operations and other Path objects with moves
+    (WorkCal's calibrated toolpaths, already in B, and tool controllers excluded)."""
+    paths = [o for o in doc.Objects if not is_job(o) and hasattr(o, "Path") and hasattr(o.Path, "Commands")
+             and type_of(o) != TYPE
+             and not hasattr(o, "SpindleSpeed")  # tool controllers hold a tool change, not a path
+             and any(c.Name in MOTION for c in o.Path.Commands)]
+    return jobs(doc) + paths
+
+
+def source_label(source) -> str:
+    return os.path.basename(os.fspath(source)) if isinstance(source, (str, os.PathLike)) else source.Label
+
+
+def read_source(source) -> Toolpath:
+    """A source (Job, Path object or G-code file path) as a Toolpath in the workpiece frame X."""
+    if source is None:
+        raise InputError("no toolpath chosen: choose a Path/CAM Job or a G-code file first")
+    if isinstance(source, (str, os.PathLike)):
+        return read_gcode(os.fspath(source))
+    return read_toolpath(source)
+
+
+def toolpath_points(source) -> np.ndarray:
+    """The cutting points (X, mm) of a source: where the calibration's uncertainty matters."""
+    tp = linearised(read_source(source))
+    cutting = [m.end for m in tp.moves if m.kind != RAPID]
+    points = np.array(cutting) if cutting else tp.points()
+    if len(points) == 0:
+        raise InputError(f"{source_label(source)}: the toolpath has no moves")
+    return points
 
 
 def _paths(obj) -> list:
@@ -82,25 +138,134 @@ def _commands(path: Toolpath) -> list:
     return commands
 
 
-def make_path_object(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
-                     envelope: Envelope | None = None, table: RotaryTable | None = None,
-                     chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, name: str = "WorkCalPath"):
-    """A ``Path::Feature`` holding ``toolpath`` moved into B, after the same checks as a file export.
+def calibrated_path(toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
+                    envelope: Envelope | None = None, table: RotaryTable | None = None,
+                    chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, source: str = "calibration") -> tuple:
+    """(``Path.Path`` of ``toolpath`` moved into B, whether forced), after the same checks as a file export.
 
     Positions only: FreeCAD's Path treats A/B words as rotary axes and would draw the path displaced,
     so the tool axis (in every exported program) is not written into the Path object."""
     options = ExportOptions(force=force, envelope=envelope, table=table, chord_tol_mm=chord_tol_mm,
-                            calibration_source=f"calibration for {name}")
+                            calibration_source=source)
     T, forced = checked_placement(toolpath, calibration, options)
     moved = transformed(toolpath, T, chord_tol_mm)
     header = (forced_banner(calibration) if forced else []) + moved.header
     commands = [Path.Command(f"({c})") for c in header] + _commands(moved)
     commands += [Path.Command(f"({c})") for c in moved.footer]
-    obj = doc.addObject("Path::Feature", name)
-    obj.Path = Path.Path(commands)
-    if forced:
-        obj.Label = f"{name} (FORCED)"
+    return Path.Path(commands), forced
+
+
+PATH_PROPERTIES = [
+    ("App::PropertyLink", "Calibration", "Calibrated toolpath",
+     QT_TRANSLATE_NOOP("App::Property", "The calibration whose W carries the toolpath into the robot base frame")),
+    ("App::PropertyLink", "Source", "Calibrated toolpath",
+     QT_TRANSLATE_NOOP("App::Property", "The toolpath in the workpiece frame: a Path/CAM Job or operation")),
+    ("App::PropertyFile", "SourceFile", "Calibrated toolpath",
+     QT_TRANSLATE_NOOP("App::Property", "The toolpath as a G-code file (when Source is empty)")),
+    ("App::PropertyBool", "Forced", "Calibrated toolpath",
+     QT_TRANSLATE_NOOP("App::Property", "Made from a calibration that did not pass its checks, because the user "
+                                        "said so")),
+]
+
+
+class CalibratedPathFeature(Feature):
+    """Proxy of the calibrated toolpath (``Path::FeaturePython``): recomputed whenever the calibration
+    or the toolpath changes, refused (an error on the object) when the calibration is no longer fit."""
+
+    TYPE = TYPE
+
+    def setup(self, obj) -> None:
+        add_properties(obj, PATH_PROPERTIES, read_only=("Calibration", "Forced"))
+
+    def execute(self, obj):
+        from workcal_wb.fc.calibration_object import result_of
+
+        source = obj.Source if obj.Source is not None else (obj.SourceFile or None)
+        path, _ = calibrated_path(read_source(source), result_of(obj.Calibration), force=obj.Forced,
+                                  source=f"calibration {obj.Calibration.Label!r}")
+        obj.Path = path
+
+
+def check_calibrated_path(calibration, source=None, *, force: bool = False) -> bool:
+    """Every refusal ``make_calibrated_path`` would raise, without touching the document (the GUI checks
+    before it records the command); returns whether it would be forced."""
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    source = source if source is not None else toolpath_of(calibration.Document)
+    _, forced = calibrated_path(read_source(source), result_of(calibration), force=force,
+                                source=f"calibration {calibration.Label!r}")
+    return forced
+
+
+def make_calibrated_path(calibration, source=None, *, force: bool = False):
+    """The document's toolpath (or ``source``) carried into the robot base frame by ``calibration``'s
+    W, as a new object in one undo step.  Refuses (CalibrationNotOk) a calibration that is not "ok"
+    unless ``force`` (the label then says FORCED), and (ExportRefused, InputError) whatever a program
+    export would refuse; the document is then unchanged."""
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    doc = calibration.Document
+    source = source if source is not None else toolpath_of(doc)
+    result = result_of(calibration)
+    forced = check_calibrated_path(calibration, source, force=force)  # refuse before touching the document
+    with transaction(doc, translate("WorkCal", "Calibrated toolpath")):
+        obj = doc.addObject("Path::FeaturePython", "CalibratedToolpath")
+        CalibratedPathFeature(obj)
+        obj.Calibration = calibration
+        is_file = isinstance(source, (str, os.PathLike))
+        obj.Source = None if is_file else source
+        obj.SourceFile = os.fspath(source) if is_file else ""
+        obj.Forced = forced
+        obj.Label = translate("WorkCal", "Toolpath in the robot frame ({})").format(source_label(source)) + (
+            " (FORCED)" if forced else "")
+        doc.recompute()
+    FreeCAD.Console.PrintMessage(f"WorkCal: {obj.Label}: {len(read_source(source))} moves carried into the robot "
+                                 f"base frame with {calibration.Label} ({result.status})\n")
     return obj
+
+
+def calibrated_paths(calibration) -> list:
+    """The calibrated toolpaths made from ``calibration``."""
+    return [o for o in objects_of(calibration.Document, TYPE) if o.Calibration is calibration]
+
+
+def check_export(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options) -> None:
+    """Every refusal ``export_program`` would raise (CalibrationNotOk, ToolTilted, ExportRefused,
+    InputError), without writing anything (the GUI checks before it records the export)."""
+    from workcal_wb.core.toolpath.exporters import machine_for
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    source = source if source is not None else toolpath_of(calibration.Document)
+    fmt = fmt or format_for(path)
+    options = ExportOptions(force=force, calibration_source=f"calibration {calibration.Label!r}", **options)
+    checked_placement(read_source(source), result_of(calibration), options, machine_for(fmt, options.machine))
+
+
+def export_program(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options):
+    """Write the document's toolpath (or ``source``) through ``calibration``'s W as a robot or CNC
+    program; returns the core's export job.  ``fmt``: krl, rapid, urscript, fanuc, gcode or csv
+    (default: from the file extension); ``options`` go to core.toolpath.export (machine,
+    vertical_tol_deg, rotary, envelope, krl_mode, rapid_feed_mm_min, chord_tol_mm, ...).  Nothing is
+    written when the export is refused (CalibrationNotOk unless ``force``, ToolTilted, ExportRefused)."""
+    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.setup import toolpath_of
+
+    source = source if source is not None else toolpath_of(calibration.Document)
+    result = result_of(calibration)
+    toolpath = read_source(source)
+    fmt = fmt or format_for(path)
+    job = export(toolpath, result, fmt, path, force=force, calibration_source=f"calibration {calibration.Label!r}",
+                 **options)
+    text = (f"WorkCal: wrote {path}: {FORMATS[fmt].NAME} for {job.machine}, {len(toolpath)} moves from "
+            f"{source_label(source)}, calibration {result.status}")
+    if job.forced:
+        FreeCAD.Console.PrintWarning(text + " (FORCED)\n")
+    else:
+        FreeCAD.Console.PrintMessage(text + "\n")
+    return job
 
 
 def robot_available() -> bool:

@@ -3,16 +3,11 @@ import FreeCAD
 import FreeCADGui
 
 import workcal_wb
-from workcal_wb.fc import init as fc_init
+from workcal_wb.gui import view_providers
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
-# Objects the FreeCAD layer creates get these view providers (imported only when one is attached).
-fc_init.VIEW_PROVIDERS.update({
-    "Scan": "workcal_wb.gui.view_providers:ViewProviderScan",
-    "Setup": "workcal_wb.gui.view_providers:ViewProviderSetup",
-    "PlacedModel": "workcal_wb.gui.view_providers:ViewProviderPlacedModel",
-})
+view_providers.register()  # objects the FreeCAD layer makes get their view providers (imported when attached)
 
 
 class WorkCalWorkbench(FreeCADGui.Workbench):

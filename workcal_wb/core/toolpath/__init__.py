@@ -7,9 +7,10 @@ from .exporters import FORMATS, export, format_for
 from .exporters.gcode import format_gcode
 from .gcode import parse_gcode, read_gcode
 from .model import ARC_CCW, ARC_CW, LINEAR, RAPID, Event, Move, RotaryTable, Toolpath
-from .safety import MACHINES, Envelope, ExportOptions, ExportRefused, checked_placement
+from .safety import MACHINES, CalibrationNotOk, Envelope, ExportOptions, ExportRefused, ToolTilted, checked_placement
 from .transform import DEFAULT_CHORD_TOL_MM, linearised, path_points, placement, transformed
 
 __all__ = ["FORMATS", "export", "format_for", "format_gcode", "parse_gcode", "read_gcode", "ARC_CCW", "ARC_CW", "LINEAR", "RAPID",
-           "Event", "Move", "RotaryTable", "Toolpath", "MACHINES", "Envelope", "ExportOptions", "ExportRefused",
+           "Event", "Move", "RotaryTable", "Toolpath", "MACHINES", "CalibrationNotOk", "Envelope", "ExportOptions",
+           "ExportRefused", "ToolTilted",
            "checked_placement", "DEFAULT_CHORD_TOL_MM", "linearised", "path_points", "placement", "transformed"]

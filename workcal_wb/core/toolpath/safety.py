@@ -33,6 +33,24 @@ class ExportRefused(WorkCalError):
     """The inputs were readable but exporting them would be unsafe (failed gates, envelope, NaN)."""
 
 
+class CalibrationNotOk(ExportRefused):
+    """The calibration's status is not "ok": the one refusal that forcing the export overrides."""
+
+    def __init__(self, message: str, status: str):
+        super().__init__(message)
+        self.status = status
+
+
+class ToolTilted(ExportRefused):
+    """A 3-axis export whose tool axis leaves the machine's Z by ``tilt_deg``, more than ``tolerance_deg``:
+    tilted by W, or a 5-axis toolpath (``five_axis_path``: only a 5-axis machine can follow it).  The
+    ways out (level the part, allow the tilt, export for 5 axes) are the caller's to offer."""
+
+    def __init__(self, message: str, tilt_deg: float, tolerance_deg: float, five_axis_path: bool = False):
+        super().__init__(message)
+        self.tilt_deg, self.tolerance_deg, self.five_axis_path = tilt_deg, tolerance_deg, five_axis_path
+
+
 def number(value: float, decimals: int) -> str:
     """Fixed-point text of a finite number; every single number an exporter writes goes through here
     or through ``numbers`` (the same rule for a column)."""
@@ -165,16 +183,15 @@ def check_vertical(toolpath: Toolpath, T: np.ndarray, tolerance_deg: float) -> f
     if tilt <= tolerance_deg:
         return tilt
     if len(np.unique(np.round(axes, 9), axis=0)) > 1:
-        raise ExportRefused(f"{toolpath.source}: {toolpath.where(i)} tilts the tool {tilt:.3f} deg from the machine's "
-                            "Z: a 3-axis machine cannot follow this 5-axis toolpath; export for a 5-axis machine "
-                            "(--machine 5axis-tcp); nothing was written")
-    raise ExportRefused(
+        raise ToolTilted(f"{toolpath.source}: {toolpath.where(i)} tilts the tool {tilt:.3f} deg from the machine's "
+                         "Z: a 3-axis machine cannot follow this 5-axis toolpath; export for a 5-axis machine "
+                         "(--machine 5axis-tcp); nothing was written", tilt, tolerance_deg, five_axis_path=True)
+    raise ToolTilted(
         f"{toolpath.source}: W tilts the tool axis {tilt:.4f} deg from the machine's Z, more than the 3-axis "
         f"tolerance {tolerance_deg:g} deg, so a 3-axis machine cannot hold the tool as the toolpath means. "
         "Level the part on the table (shim it) and calibrate again, accept the tilt for your tool with "
         f"--vertical-tol {math.ceil(tilt * 100) / 100:g} or more, or export for a 5-axis machine "
-        "(--machine 5axis-tcp); nothing was written")
-    return tilt
+        "(--machine 5axis-tcp); nothing was written", tilt, tolerance_deg)
 
 
 def value_text(value) -> str:
@@ -202,10 +219,10 @@ def check_calibration(calibration: CalibrationResult, force: bool, source: str =
     if calibration.status == OK:
         return False
     if not force:
-        raise ExportRefused(
+        raise CalibrationNotOk(
             f"{source}: calibration status is {calibration.status!r} ({'; '.join(failed_checks(calibration))}); "
             "refusing to export. Fix the calibration, or force the export (--force) "
-            "and the file says FORCED at its top")
+            "and the file says FORCED at its top", calibration.status)
     return True
 
 

@@ -12,11 +12,12 @@ SEPARATOR = "Separator"
 
 # Add a module here to add its commands to the workbench (order = toolbar and menu order).
 MODULES = [
+    "guide",  # WorkCal_Guide
     "import_scan",  # WorkCal_ImportScan
     "models",  # WorkCal_ChooseModels
     "regions",  # WorkCal_PickBox, WorkCal_PickLasso, WorkCal_AutoRegions, WorkCal_ClearRegions
     "calibrate",  # WorkCal_Calibrate
-    "report",  # WorkCal_DeviationMap, WorkCal_Report, WorkCal_Studies
+    "report",  # WorkCal_DeviationMap, WorkCal_ShowInRobotFrame (menu only), WorkCal_Report, WorkCal_Studies
     "toolpath",  # WorkCal_TransformToolpath, WorkCal_ExportToolpath
     "preferences",  # WorkCal_Preferences (menu only)
 ]

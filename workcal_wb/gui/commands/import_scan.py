@@ -1,9 +1,10 @@
 """WorkCal_ImportScan: read scan files into WorkCal scan objects.
 
-``import_scan_files(paths, units)`` is what the command does after its file dialog (tests and macros
-call it directly).  The length unit of scan files is asked once and remembered (preference
-"ScanUnits"); a PLY written by WorkCal declares its own unit.  Files are read in a worker thread with
-a progress dialog; each file is one undo step and becomes the document's scan (WorkCal setup).
+``import_scan_files(paths, units)`` is what the command does after its file dialog (tests call it
+directly).  The length unit of scan files is asked once and remembered (preference "ScanUnits"); a
+PLY written by WorkCal declares its own unit.  Each file is read in a worker thread with a progress
+dialog, then added by the recorded command ``workcal_wb.fc.scan.import_scan(...)`` (one undo step,
+replayable in a macro), which makes it the document's scan.
 """
 from __future__ import annotations
 
@@ -13,9 +14,8 @@ import FreeCAD
 
 from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.units import MM_PER_UNIT
-from workcal_wb.fc.undo import transaction
-from workcal_wb.gui.task_panels.common import Command, message, warning
-from workcal_wb.gui.view import look
+from workcal_wb.gui import replay
+from workcal_wb.gui.task_panels.common import Command
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -45,7 +45,7 @@ def ask_units(ask_again: bool = False) -> str:
     choice, ok = QtWidgets.QInputDialog.getItem(
         FreeCADGui.getMainWindow(), translate("WorkCal", "Scan units"),
         translate("WorkCal", "Length unit of the numbers in scan files\n(asked once; change it in the WorkCal "
-                             "preferences, parameter ScanUnits):"),
+                             "preferences):"),
         list(UNIT_CHOICES), 0, False)
     if not ok:
         raise Cancelled(translate("WorkCal", "import cancelled: no unit chosen"))
@@ -53,13 +53,14 @@ def ask_units(ask_again: bool = False) -> str:
     return choice
 
 
-def import_scan_files(paths, units: str | None = None, doc=None, background: bool = True) -> list:
+def import_scan_files(paths, units: str | None = None, doc=None) -> list:
     """Import each file as a WorkCal scan; returns the new objects.
 
     ``units``: the files' length unit (default: the remembered one, asked once).  A file that cannot
     be read raises InputError naming it; files before it stay imported (each is its own undo step)."""
+    import FreeCADGui
+
     from workcal_wb.fc import scan as fc_scan
-    from workcal_wb.fc.setup import set_setup
     from workcal_wb.gui.progress import run_in_background
 
     paths = [str(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
@@ -69,42 +70,33 @@ def import_scan_files(paths, units: str | None = None, doc=None, background: boo
     if units not in MM_PER_UNIT:
         raise InputError(translate("WorkCal", "unknown length unit {!r}; use one of {}").format(
             units, ", ".join(MM_PER_UNIT)))
-    doc = doc or FreeCAD.ActiveDocument or FreeCAD.newDocument("Scan")
+    if doc is None and FreeCAD.ActiveDocument is None:
+        FreeCADGui.runCommand("Std_New")  # recorded by FreeCAD itself: App.newDocument(...)
+    doc = doc or FreeCAD.ActiveDocument
     created = []
-    for path in paths:
-        name = os.path.basename(path)
-        if os.path.splitext(path)[1].lower() in fc_scan.FREECAD_POINT_FORMATS or not background:
-            cloud = fc_scan.read_scan_file(path, units)  # FreeCAD's reader touches documents: main thread
+    for path in paths:  # read first (remembered): a file that cannot be read is refused before it is recorded
+        if os.path.splitext(path)[1].lower() in fc_scan.FREECAD_POINT_FORMATS:  # FreeCAD's reader: main thread
+            fc_scan.read_scan_file(path, units)
         else:
-            cloud = run_in_background(lambda p=path: fc_scan.read_scan_file(p, units),
-                                      translate("WorkCal", "Reading {}...").format(name),
-                                      translate("WorkCal", "Import scan"))
-        used = fc_scan.declared_units(path) or units
-        with transaction(doc, translate("WorkCal", "Import scan")):
-            obj = fc_scan.make_scan(doc, cloud, name, used, path)
-            set_setup(doc, scan=obj)
-            doc.recompute()
-        for text in cloud.warnings:
-            warning(text)
-        message(translate("WorkCal", "imported {} ({} points, read as {})").format(name, len(cloud), used))
-        created.append(obj)
+            run_in_background(lambda p=path: fc_scan.read_scan_file(p, units),
+                              translate("WorkCal", "Reading {}...").format(os.path.basename(path)),
+                              translate("WorkCal", "Import scan"))
+        created.append(replay.run("workcal_wb.fc.scan.import_scan", doc, path, units, result="scan"))
     FreeCAD.ParamGet(fc_scan.PARAMS).SetString(LAST_DIR_KEY, os.path.dirname(os.path.abspath(paths[-1])))
-    _show(doc, created)
     return created
 
 
-def _show(doc, objects) -> None:
-    if not FreeCAD.GuiUp or not objects:
-        return
+def ask_for_scan_files() -> list:
+    """The scan files chosen in a file dialog (opening where the last scan was read)."""
     import FreeCADGui
 
-    gui_doc = FreeCADGui.getDocument(doc.Name)
-    view = gui_doc.ActiveView if gui_doc is not None else None
-    FreeCADGui.Selection.clearSelection()
-    for obj in objects:
-        FreeCADGui.Selection.addSelection(obj)
-    if view is not None and hasattr(view, "fitAll"):
-        look(view)
+    from workcal_wb.fc.scan import PARAMS
+    from workcal_wb.gui.task_panels import QtWidgets
+
+    start = FreeCAD.ParamGet(PARAMS).GetString(LAST_DIR_KEY, "") or os.path.expanduser("~")
+    paths, _ = QtWidgets.QFileDialog.getOpenFileNames(
+        FreeCADGui.getMainWindow(), translate("WorkCal", "Import scan"), start, file_filter())
+    return paths
 
 
 class ImportScanCommand(Command):
@@ -116,16 +108,12 @@ class ImportScanCommand(Command):
     NEEDS_DOCUMENT = False
 
     def run(self):
-        import FreeCADGui
+        from workcal_wb.gui.commands.guide import open_guide
 
-        from workcal_wb.fc.scan import PARAMS
-        from workcal_wb.gui.task_panels import QtWidgets
-
-        start = FreeCAD.ParamGet(PARAMS).GetString(LAST_DIR_KEY, "") or os.path.expanduser("~")
-        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(
-            FreeCADGui.getMainWindow(), translate("WorkCal", "Import scan"), start, file_filter())
+        paths = ask_for_scan_files()
         if paths:
             import_scan_files(paths)
+            open_guide(FreeCAD.ActiveDocument, "scan")
 
 
 COMMANDS = {"WorkCal_ImportScan": ImportScanCommand()}

@@ -31,6 +31,8 @@ class PreferencePage:
 
         self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
         self.form.setWindowTitle(translate("WorkCal", "WorkCal"))
+        self.form.deviationRange.setSpecialValueText(translate("WorkCal", "automatic (3 tolerances)"))
+        self.form.reportDirBrowse.clicked.connect(self.browse_report_dir)
         self.form.units.addItem(translate("WorkCal", "ask at the first import"), "")
         for unit in prefs.UNITS:
             self.form.units.addItem(unit, unit)
@@ -51,6 +53,7 @@ class PreferencePage:
         f.exportFormat.setCurrentIndex(max(0, f.exportFormat.findData(values["ExportFormat"])))
         f.deviationRange.setValue(values["DeviationRangeMm"])
         f.reportDir.setText(values["ReportDir"])
+        f.pickVisibleOnly.setChecked(bool(values["PickVisibleOnly"]))
 
     def saveSettings(self):
         f = self.form
@@ -63,6 +66,15 @@ class PreferencePage:
         prefs.set("ExportFormat", f.exportFormat.currentData() or "krl")
         prefs.set("DeviationRangeMm", f.deviationRange.value())
         prefs.set("ReportDir", f.reportDir.text().strip())
+        prefs.set("PickVisibleOnly", int(f.pickVisibleOnly.isChecked()))
+
+    def browse_report_dir(self) -> None:
+        from workcal_wb.gui.task_panels import QtWidgets
+
+        start = self.form.reportDir.text().strip() or os.path.expanduser("~")
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self.form, translate("WorkCal", "Report folder"), start)
+        if folder:
+            self.form.reportDir.setText(folder)
 
 
 _registered = False

@@ -2,16 +2,16 @@
 
 The scan a command works on: the selected WorkCal scan, else the document's setup scan, else a
 selected point cloud or mesh, else the only WorkCal scan in the document.  ``open_pick_panel``,
-``auto_regions`` and ``clear_regions`` are the commands without their dialogs.
+``auto_regions`` and ``clear_regions`` are the commands without their dialogs; every document change
+is a recorded ``workcal_wb.fc.regions`` call (replayable in a macro).
 """
 from __future__ import annotations
 
 import FreeCAD
 
 from workcal_wb.core.errors import InputError, WorkCalError
-from workcal_wb.fc.undo import transaction
-from workcal_wb.gui.task_panels.common import (Command, active_document, message, refuse_second_panel,
-                                              selected_objects, warning)
+from workcal_wb.gui import replay
+from workcal_wb.gui.task_panels.common import Command, active_document, refuse_second_panel, selected_objects
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 translate = FreeCAD.Qt.translate
@@ -44,11 +44,13 @@ def target_scan(doc=None):
 
 # --- picking -------------------------------------------------------------------------------------
 
-def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece"):
-    """Open the picking task panel on ``scan`` (or switch the open one to ``shape``); returns the panel."""
+def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece", on_close=None):
+    """Open the picking task panel on ``scan`` (or switch the open one to ``shape``); returns the panel.
+    ``on_close()`` runs after the panel closed (later, from the event loop)."""
     import FreeCADGui
 
     from workcal_wb.gui.picking import PickPanel
+    from workcal_wb.gui.task_panels import QtCore
 
     current = _open_pick_panel()
     if current is not None:
@@ -61,7 +63,8 @@ def open_pick_panel(scan=None, shape: str = "box", role: str = "workpiece"):
     if view is None or not hasattr(view, "addEventCallbackPivy"):
         raise WorkCalError(translate("WorkCal", "picking needs the 3D view of {}: activate it first").format(
             scan.Document.Label))
-    panel = PickPanel(scan, view, shape, role)
+    later = (lambda: QtCore.QTimer.singleShot(0, on_close)) if on_close is not None else None
+    panel = PickPanel(scan, view, shape, role, on_close=later)
     _PANELS.append(panel)
     FreeCADGui.Control.showDialog(panel)
     return panel
@@ -102,69 +105,37 @@ class PickLassoCommand(PickCommand):
 
 # --- automatic regions ---------------------------------------------------------------------------
 
-def auto_regions(scan=None, workpiece=None, reference=None, background: bool = True) -> dict:
-    """Find the workpiece and reference regions with the models of the setup and store them (source
-    "auto", one undo step); returns what ``find_regions`` returned.  InputError says what is missing
-    or which object was not found; the document is then unchanged."""
-    from workcal_wb.fc import scan as fc_scan
-    from workcal_wb.fc.models import model_cloud
-    from workcal_wb.fc.setup import get_setup
+def auto_regions(scan=None, workpiece=None, reference=None) -> dict:
+    """Find the workpiece and reference regions with the models of the setup (in a worker thread, with
+    a progress dialog) and store them (recorded ``fc.regions.auto_regions``, one undo step); returns
+    what was found.  InputError says what is missing or which object was not found; the document is
+    then unchanged."""
+    from workcal_wb.fc import regions as fc_regions
+    from workcal_wb.gui.progress import run_in_background
 
     scan = scan or target_scan()
-    doc = scan.Document
-    setup = get_setup(doc)
-    workpiece = workpiece or setup["workpiece"]
-    reference = reference or setup["reference"]
-    missing = [name for name, obj in ((translate("WorkCal", "workpiece model"), workpiece),
-                                      (translate("WorkCal", "reference model"), reference)) if obj is None]
-    if missing:
-        raise InputError(translate("WorkCal", "automatic regions need the {}: choose it first "
-                                              "(WorkCal > Choose models)").format(" and the ".join(missing)))
-    cloud = fc_scan.scan_cloud(scan)
-    models = model_cloud(workpiece), model_cloud(reference)
-    from workcal_wb.core.regions import find_regions
-
-    def job():
-        return find_regions(cloud, *models)
-
-    if background:
-        from workcal_wb.gui.progress import run_in_background
-
-        found = run_in_background(job, translate("WorkCal", "Finding the workpiece and the reference in {}...")
-                                  .format(scan.Label), translate("WorkCal", "Automatic regions"))
-    else:
-        found = job()
-    with transaction(doc, translate("WorkCal", "Find regions automatically")):
-        fc_scan.set_regions(scan, found["workpiece"], found["reference"], source="auto")
+    clouds = fc_regions.regions_inputs(scan, workpiece, reference)
+    run_in_background(lambda: fc_regions.find_regions(clouds, blas_threads=None),
+                      translate("WorkCal", "Finding the workpiece and the reference in {}...").format(scan.Label),
+                      translate("WorkCal", "Automatic regions"))
+    found = replay.run("workcal_wb.fc.regions.auto_regions", scan, workpiece, reference, result="regions")
     _update_display(scan)
-    for text in found.get("warnings", []):
-        warning(text)
-    message(translate("WorkCal", "regions of {} found: workpiece {} points, reference {} points; check them "
-                                 "and correct with the pick tools if needed").format(
-        scan.Label, len(found["workpiece"]), len(found["reference"])))
     return found
 
 
-def _update_display(scan) -> None:
-    if FreeCAD.GuiUp:
-        from workcal_wb.gui import region_display
-
-        region_display.update(scan)
-
-
 def clear_regions(scan=None) -> bool:
-    """Remove both regions of the scan (one undo step); False (and a warning) when there were none."""
-    from workcal_wb.fc import scan as fc_scan
-
+    """Remove both regions of the scan (recorded, one undo step); False (and a warning) when there were none."""
     scan = scan or target_scan()
-    if not fc_scan.has_regions(scan):
-        warning(translate("WorkCal", "{} has no regions to clear").format(scan.Label))
-        return False
-    with transaction(scan.Document, translate("WorkCal", "Clear regions")):
-        fc_scan.set_regions(scan)
+    cleared = replay.run("workcal_wb.fc.regions.clear_regions", scan, result="cleared")
     _update_display(scan)
-    message(translate("WorkCal", "regions of {} cleared").format(scan.Label))
-    return True
+    return cleared
+
+
+def _update_display(scan) -> None:
+    """The region colours at once (the view provider's own update waits for the event loop)."""
+    from workcal_wb.gui import region_display
+
+    region_display.update(scan)
 
 
 class AutoRegionsCommand(Command):

@@ -1,7 +1,8 @@
-"""WorkCal_DeviationMap, WorkCal_Report and WorkCal_Studies: looking at a calibration and at the method.
+"""Looking at a calibration and at the method: WorkCal_DeviationMap, WorkCal_ShowInRobotFrame,
+WorkCal_Report and WorkCal_Studies.
 
-Non-interactive entry points: ``deviation_map(doc, calibration)``, ``write_report(calibration, out_dir)``,
-``run_study(name, out_dir)``; the commands call them and then show the result.
+Document changes are recorded ``workcal_wb.fc`` calls (replayable in a macro); ``open_report`` shows
+a written report in FreeCAD's web view (or the system browser where FreeCAD has none).
 """
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import traceback
 import FreeCAD
 
 from workcal_wb.core.errors import Cancelled, InputError, WorkCalError
+from workcal_wb.gui import replay
 from workcal_wb.gui.task_panels import QtCore
 from workcal_wb.gui.task_panels.common import Command, active_document, calibration_for, message, warning
 
@@ -22,96 +24,74 @@ translate = FreeCAD.Qt.translate
 
 # ------------------------------------------------------------------------------ deviation map
 
-def deviation_map(doc, calibration, range_mm: float | None = None):
-    """The deviation map of a calibration's workpiece region (see fc.deviation_view)."""
-    from workcal_wb.fc.deviation_view import make_deviation_map
+def deviation_map(calibration, limit_mm: float | None = None):
+    """The deviation map of a calibration's workpiece region (recorded ``fc.deviation_map.make_deviation_map``),
+    shown instead of the scan."""
+    from workcal_wb.fc.calibration_object import workpiece_region
 
-    return make_deviation_map(doc, calibration, range_mm=range_mm)
+    workpiece_region(calibration)  # no U, no region, a changed scan: refused before it is recorded
+    kwargs = {"limit_mm": limit_mm} if limit_mm else {}
+    obj = replay.run("workcal_wb.fc.deviation_map.make_deviation_map", calibration, result="deviation_map", **kwargs)
+    if calibration.Scan is not None and getattr(calibration.Scan, "ViewObject", None) is not None:
+        calibration.Scan.ViewObject.Visibility = False  # the map lies exactly on the scan
+    return obj
 
 
 class DeviationMapCommand(Command):
     NAME, TITLE = "WorkCal_DeviationMap", "Deviation map"
     MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Deviation map")
-    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Colour the workpiece points of the scan by their signed "
-                                                         "distance to the placed model: red where clay was added, blue "
-                                                         "where it was removed")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_DeviationMap", "Colour the workpiece's scan points by their distance to its "
+                                                         "placed model: green within the tolerance, red where clay was "
+                                                         "added, blue where it was removed")
 
     def run(self):
-        doc = active_document()
-        deviation_map(doc, calibration_for(doc))
+        deviation_map(calibration_for(active_document()))
+
+
+class ShowInRobotFrameCommand(Command):
+    NAME, TITLE = "WorkCal_ShowInRobotFrame", "Workpiece in the robot frame"
+    MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_ShowInRobotFrame", "Show the workpiece model in the robot frame")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_ShowInRobotFrame", "Show the workpiece model where the calibration puts it "
+                                                             "in the robot base frame (placed by W), beside the "
+                                                             "reference model")
+
+    def run(self):
+        replay.run("workcal_wb.fc.placed_model.show_in_robot_frame", calibration_for(active_document()),
+                   result="placed_model")
 
 
 # ------------------------------------------------------------------------------------- report
 
-def default_report_dir(calibration) -> str:
-    from workcal_wb.fc import prefs
-
-    base = prefs.get("ReportDir")
-    doc = calibration.Document
-    if not base:
-        base = os.path.dirname(doc.FileName) if doc.FileName else os.path.join(tempfile.gettempdir(), "workcal")
-    stem = os.path.splitext(os.path.basename(doc.FileName))[0] if doc.FileName else doc.Name
-    return os.path.join(base, f"{stem}_{calibration.Name}_report")
+def write_report(calibration, out_dir: str | None = None) -> dict:
+    """report.html and report.json of a calibration (recorded ``fc.report.write_report``); their paths."""
+    kwargs = {"out_dir": out_dir} if out_dir else {}
+    return replay.run("workcal_wb.fc.report.write_report", calibration, result="report", **kwargs)
 
 
-def _workpiece_data(calibration, result) -> dict:
-    """The workpiece region of the scan (S) and X-A, for the report's deviation map; {} if unavailable."""
-    from workcal_wb.fc.calibration_object import _model_cloud, _scan_cloud
+def open_report(path: str) -> str:
+    """Show a report: in FreeCAD's web view when FreeCAD has one, else in the system browser.  Returns
+    where it went ("freecad" or "browser")."""
+    from workcal_wb.gui.task_panels import QtGui
 
-    idx = (result.regions or {}).get("workpiece")
-    if result.U is None or idx is None or len(idx) == 0:
-        return {}
-    try:
-        scan = _scan_cloud(calibration.Scan)
-        model = _model_cloud(calibration.Workpiece, "workpiece")
-    except WorkCalError as exc:  # the report still shows the numbers
-        warning(f"report without the deviation map: {exc}")
-        return {}
-    idx = [i for i in idx if i < len(scan)]
-    return {"workpiece_points": scan.points[idx], "workpiece_model": model}
-
-
-def write_report(calibration, out_dir: str | None = None, *, open_it: bool = False, studies=()) -> dict:
-    """Write report.html and report.json of a calibration object; returns their paths ("html", "json")."""
-    from workcal_wb.core import report as core_report
-    from workcal_wb.fc.calibration_object import result_of
-
-    result = result_of(calibration)
-    out_dir = out_dir or default_report_dir(calibration)
-    paths = core_report.write_report(result, out_dir, studies=studies,
-                                     title=f"WorkCal calibration: {calibration.Document.Label} / {calibration.Label}",
-                                     **_workpiece_data(calibration, result))
-    paths = {k: os.fspath(v) for k, v in paths.items()}
-    message(translate("WorkCal", "report written: {}").format(paths["html"]))
-    if open_it:
-        open_in_browser(paths["html"])
-    return paths
-
-
-def open_in_browser(path: str) -> None:
-    """Open a local HTML file in the system browser (or FreeCAD's web view if none)."""
-    from workcal_wb.gui.task_panels import QtCore, QtGui
-
-    url = QtCore.QUrl.fromLocalFile(os.path.abspath(path))
-    if QtGui.QDesktopServices.openUrl(url):
-        return
+    url = QtCore.QUrl.fromLocalFile(os.path.abspath(path)).toString()
     try:
         import WebGui
 
-        WebGui.openBrowser(url.toString())
-    except Exception as exc:
-        message(f"open {path} in a browser ({exc})")
+        WebGui.openBrowser(url)
+        return "freecad"
+    except Exception:  # no web view in this FreeCAD (WebGui missing or without QtWebEngine)
+        QtGui.QDesktopServices.openUrl(QtCore.QUrl(url))
+        return "browser"
 
 
 class ReportCommand(Command):
     NAME, TITLE = "WorkCal_Report", "Calibration report"
     MENU_TEXT = QT_TRANSLATE_NOOP("WorkCal_Report", "Calibration report")
-    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Report", "Write the HTML report of the calibration (poses, residuals, "
-                                                   "uncertainty, quality gates) and open it")
+    TOOL_TIP = QT_TRANSLATE_NOOP("WorkCal_Report", "Write the report of the calibration (where the workpiece is, "
+                                                   "residuals, uncertainty, checks, deviation map) and open it")
 
     def run(self):
-        doc = active_document()
-        write_report(calibration_for(doc), open_it=True)
+        open_report(write_report(calibration_for(active_document()))["html"])
 
 
 # -------------------------------------------------------------------------------------- studies
@@ -187,7 +167,7 @@ class StudyRunner(QtCore.QObject):
 
 def start_study(name: str, out_dir: str | None = None, *, show: bool = True, **kwargs) -> StudyRunner:
     """Run a study without blocking the window; on success its plot opens in a window (``show``)."""
-    from workcal_wb.gui.task_panels.calibrate_panel import StatusProgress
+    from workcal_wb.gui.task_panels.runner import StatusProgress
 
     out_dir = out_dir or os.path.join(tempfile.gettempdir(), "workcal-studies", name)
     runner = StudyRunner(name, out_dir, **kwargs)
@@ -227,7 +207,7 @@ class ImageDialog:
     """A non-modal window with a PNG plot."""
 
     def __init__(self, title: str, png: str):
-        from workcal_wb.gui.task_panels import QtCore, QtGui, QtWidgets
+        from workcal_wb.gui.task_panels import QtGui, QtWidgets
         from workcal_wb.gui.task_panels.common import main_window
 
         self.dialog = QtWidgets.QDialog(main_window())
@@ -278,5 +258,6 @@ class StudiesCommand(Command):
         start_study(list(studies)[items.index(item)])
 
 
-COMMANDS = {"WorkCal_DeviationMap": DeviationMapCommand(), "WorkCal_Report": ReportCommand(),
-            "WorkCal_Studies": StudiesCommand()}
+COMMANDS = {"WorkCal_DeviationMap": DeviationMapCommand(), "WorkCal_ShowInRobotFrame": ShowInRobotFrameCommand(),
+            "WorkCal_Report": ReportCommand(), "WorkCal_Studies": StudiesCommand()}
+TOOLBAR = ["WorkCal_DeviationMap", "WorkCal_Report", "WorkCal_Studies"]

@@ -12,6 +12,7 @@ except ImportError:  # pragma: no cover - depends on the FreeCAD version
 # What a task panel's getStandardButtons returns.  Not int(): PySide6 flags are not ints, and FreeCAD
 # converts the flags itself on every version.
 OK_CANCEL = QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel
+CLOSE = QtWidgets.QDialogButtonBox.Close
 
 
 def run_modal(dialog):
@@ -20,4 +21,4 @@ def run_modal(dialog):
     return run()
 
 
-__all__ = ["QtCore", "QtGui", "QtWidgets", "OK_CANCEL", "run_modal"]
+__all__ = ["QtCore", "QtGui", "QtWidgets", "OK_CANCEL", "CLOSE", "run_modal"]

@@ -16,7 +16,7 @@ import FreeCAD
 import workcal_wb
 from workcal_wb.core.errors import Cancelled, WorkCalError
 
-from . import QtWidgets, run_modal
+from . import QtCore, QtWidgets, run_modal
 
 translate = FreeCAD.Qt.translate
 
@@ -111,6 +111,39 @@ def show_panel(make_panel):
     return panel
 
 
+def close_dialog() -> None:
+    """Close the open task dialog, then bring the Model tab (tree and properties) to the front again
+    once FreeCAD has closed it: FreeCAD 1.x leaves the empty Tasks tab in front."""
+    import FreeCADGui
+
+    if FreeCADGui.Control.activeDialog():
+        FreeCADGui.Control.closeDialog()
+    QtCore.QTimer.singleShot(0, show_model_tab)
+
+
+def dock(name: str):
+    """FreeCAD's dock widget of that object name ("Combo View" on 0.20; "Model", "Tasks" on 1.x), or None."""
+    import FreeCADGui
+
+    docks = [d for d in FreeCADGui.getMainWindow().findChildren(QtWidgets.QDockWidget) if d.objectName() == name]
+    return docks[0] if docks else None
+
+
+def show_model_tab() -> None:
+    """The Model tab in front, unless a task dialog is open (the Tasks tab belongs in front then).  FreeCAD
+    0.20 has them as the combo view's tabs; 1.x as two docks tabbed together."""
+    import FreeCADGui
+
+    if FreeCADGui.Control.activeDialog():
+        return
+    combo = dock("Combo View")
+    tabs = combo.findChild(QtWidgets.QTabWidget) if combo is not None else None
+    if tabs is not None:
+        tabs.setCurrentIndex(0)
+    elif dock("Model") is not None:
+        dock("Model").raise_()
+
+
 def active_document():
     doc = FreeCAD.ActiveDocument
     if doc is None:
@@ -126,7 +159,7 @@ def selected_objects() -> list:
     return list(FreeCADGui.Selection.getSelection())
 
 
-def calibration_for(doc, required_ok: bool = False):
+def calibration_for(doc):
     """The calibration the user means: the selected one, or the only/most recent one in the document."""
     from workcal_wb.fc.calibration_object import find_calibrations, is_calibration
 
@@ -159,15 +192,14 @@ def confirm_force(reason: str) -> bool:
 
 
 def with_force(action, confirm=None):
-    """Run ``action(force=False)``; when the calibration is refused, ask ``confirm(reason)`` (default:
-    a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result or None."""
-    from workcal_wb.core.toolpath import ExportRefused
+    """Run ``action(force=False)``; when the calibration is refused for its status, ask ``confirm(reason)``
+    (default: a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result
+    or None.  Other refusals (envelope, tilt, non-finite numbers) propagate: forcing does not help there."""
+    from workcal_wb.core.toolpath import CalibrationNotOk
 
     try:
         return action(force=False)
-    except ExportRefused as exc:
-        if "status is" not in str(exc):  # envelope or non-finite numbers: forcing does not help
-            raise
+    except CalibrationNotOk as exc:
         if not (confirm or confirm_force)(str(exc)):
             warning(str(exc))
             return None

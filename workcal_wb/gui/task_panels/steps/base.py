@@ -1,0 +1,135 @@
+"""What the guide's steps share: the Step base class, the Scene a step shows, narrow-panel widgets."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import FreeCAD
+
+from workcal_wb.gui.task_panels import QtCore, QtWidgets
+
+translate = FreeCAD.Qt.translate
+
+DONE, TODO, ATTENTION = "done", "todo", "attention"
+
+
+@dataclass
+class Scene:
+    """What the 3D view shows for a step: ``show`` these objects (the calibration's others are hidden),
+    fit the view to ``fit`` (default: all shown), ``labels``: (text, object or (2, 3) box) pairs,
+    ``orientation``: a FreeCAD.Rotation, "isometric", or None to keep the camera's."""
+
+    show: list = field(default_factory=list)
+    fit: list = field(default_factory=list)
+    labels: list = field(default_factory=list)
+    orientation: object = None
+
+
+class Step:
+    NAME = TITLE = HEADING = TIP = ""
+
+    def __init__(self, guide):
+        self.guide = guide
+        self.doc = guide.doc
+        self.widget = QtWidgets.QWidget()
+        self.widget.setObjectName(f"WorkCalPage_{self.NAME}")
+        layout = QtWidgets.QVBoxLayout(self.widget)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.build(layout)
+        layout.addStretch(1)
+
+    def build(self, layout) -> None:
+        raise NotImplementedError
+
+    def state(self) -> tuple:
+        raise NotImplementedError
+
+    def refresh(self) -> None:
+        """Read the page's widgets from the document again."""
+
+    def scene(self) -> Scene:
+        return Scene()
+
+    def setup(self) -> dict:
+        from workcal_wb.fc.setup import get_setup
+
+        return get_setup(self.doc)
+
+    def reveal(self, widget) -> None:
+        reveal(widget)
+
+    def run_guarded(self, title: str, action):
+        """Run ``action()`` as a command runs: errors become messages (Report view and, interactively, a box)."""
+        from workcal_wb.gui.task_panels.common import guarded
+
+        result = guarded(title)(action)()
+        self.guide.refresh()
+        return result
+
+
+def reveal(widget) -> None:
+    """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight."""
+    parent = widget.parentWidget()
+    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+        parent = parent.parentWidget()
+    if parent is not None:
+        QtCore.QTimer.singleShot(0, lambda: parent.ensureWidgetVisible(widget))
+
+
+class WrappingLabel(QtWidgets.QLabel):
+    """A QLabel that wraps and asks for the height its text needs at the width it got: layouts inside
+    FreeCAD's task view size a wrapping label from its width hint, so a text that wraps to more lines
+    at the width the label finally gets would be cut off at the bottom."""
+
+    def resizeEvent(self, event):
+        super().resizeEvent(event)
+        needed = self.heightForWidth(self.width())
+        if needed > 0 and needed != self.minimumHeight():
+            self.setMinimumHeight(needed)
+
+
+def label(text: str = "", tip: str = "", name: str = "") -> QtWidgets.QLabel:
+    """A label that wraps: it never widens the panel, and it is as tall as its text needs."""
+    widget = WrappingLabel(text)
+    widget.setWordWrap(True)
+    widget.setTextFormat(QtCore.Qt.PlainText)
+    if tip:
+        widget.setToolTip(tip)
+    if name:
+        widget.setObjectName(name)
+    return widget
+
+
+def button(text: str, tip: str, slot, name: str = "") -> QtWidgets.QPushButton:
+    widget = QtWidgets.QPushButton(text)
+    widget.setToolTip(tip)
+    widget.clicked.connect(lambda checked=False: slot())
+    if name:
+        widget.setObjectName(name)
+    return widget
+
+
+def form_layout() -> QtWidgets.QFormLayout:
+    """A form whose fields go under their labels when the panel is narrow."""
+    form = QtWidgets.QFormLayout()
+    form.setRowWrapPolicy(QtWidgets.QFormLayout.WrapLongRows)
+    form.setFieldGrowthPolicy(QtWidgets.QFormLayout.AllNonFixedFieldsGrow)
+    return form
+
+
+def combo(name: str, tip: str) -> QtWidgets.QComboBox:
+    """A combo box that takes the width it is given (long entries are shortened, never the panel widened)."""
+    widget = QtWidgets.QComboBox()
+    widget.setObjectName(name)
+    widget.setToolTip(tip)
+    widget.setSizeAdjustPolicy(QtWidgets.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+    widget.setMinimumContentsLength(8)
+    return widget
+
+
+def row(*widgets) -> QtWidgets.QHBoxLayout:
+    layout = QtWidgets.QHBoxLayout()
+    for widget in widgets:
+        layout.addWidget(widget)
+    return layout
+
+

@@ -1,0 +1,236 @@
+"""Step 7: the program for the robot or the machine, with the machine it is for.
+
+The machine profile is the CLI's ``--machine`` (robot, 3axis, 5axis-tcp) with its ``--vertical-tol``
+and ``--rotary``: a tilted W refused for a 3-axis machine is explained here in words, with its two
+ways out a click away (allow the tilt, or export for a 5-axis machine).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import FreeCAD
+
+from workcal_wb.core.errors import WorkCalError
+from workcal_wb.gui.task_panels import QtWidgets
+
+from .base import DONE, TODO, Step, button, combo, form_layout, label, row
+from .toolpath import robot_frame_scene
+
+translate = FreeCAD.Qt.translate
+
+MACHINES = (("robot", translate("WorkCal", "Robot")), ("3axis", translate("WorkCal", "3-axis machine")),
+            ("5axis-tcp", translate("WorkCal", "5-axis machine")))
+ROTARY_WORDS = {"ab": "A + B", "ac": "A + C", "bc": "B + C"}
+
+
+class ExportStep(Step):
+    NAME = "export"
+    TITLE = translate("WorkCal", "Export")
+    HEADING = translate("WorkCal", "Export: the program for the robot or the machine")
+    TIP = translate("WorkCal", "Write the calibrated toolpath as KUKA KRL, ABB RAPID, URScript, Fanuc LS, G-code or "
+                               "CSV, checked for the machine it is for")
+
+    def build(self, layout) -> None:
+        from workcal_wb.core.toolpath import FORMATS
+        from workcal_wb.core.toolpath.orientation import ROTARY
+        from workcal_wb.core.toolpath.safety import DEFAULT_VERTICAL_TOL_DEG
+        from workcal_wb.fc import prefs
+
+        form = form_layout()
+        self.format = combo("WorkCal_format", translate("WorkCal", "The controller's language"))
+        for name, module in FORMATS.items():
+            self.format.addItem(module.NAME, name)
+        self.format.setCurrentIndex(max(0, self.format.findData(prefs.get("ExportFormat"))))
+        self.machine = combo("WorkCal_machine", translate(
+            "WorkCal", "What the program is for: a robot (KRL, RAPID, URScript, Fanuc, CSV), or for G-code a 3-axis "
+                       "machine (the tool stays vertical) or a 5-axis machine with tool centre point control"))
+        self.tilt = QtWidgets.QDoubleSpinBox()
+        self.tilt.setObjectName("WorkCal_vertical_tol")
+        self.tilt.setDecimals(3)
+        self.tilt.setRange(0.0, 10.0)
+        self.tilt.setSingleStep(0.05)
+        self.tilt.setSuffix(" deg")
+        self.tilt.setValue(DEFAULT_VERTICAL_TOL_DEG)
+        self.tilt.setToolTip(translate("WorkCal", "3-axis machine: how far W may tilt the tool from the machine's Z "
+                                                  "(the CLI's --vertical-tol)"))
+        self.rotary = combo("WorkCal_rotary", translate("WorkCal", "5-axis machine: its two rotary axes (the CLI's "
+                                                                   "--rotary)"))
+        for name in ROTARY:
+            self.rotary.addItem(ROTARY_WORDS.get(name, name.upper()), name)
+        self.tilt_title = QtWidgets.QLabel(translate("WorkCal", "Tilt allowed"))
+        self.rotary_title = QtWidgets.QLabel(translate("WorkCal", "Rotary axes"))
+        form.addRow(translate("WorkCal", "Format"), self.format)
+        form.addRow(translate("WorkCal", "Machine"), self.machine)
+        form.addRow(self.tilt_title, self.tilt)
+        form.addRow(self.rotary_title, self.rotary)
+        layout.addLayout(form)
+        self.path = QtWidgets.QLineEdit()
+        self.path.setObjectName("WorkCal_program_file")
+        self.path.setToolTip(translate("WorkCal", "The program file to write (replaced as a whole, never half "
+                                                  "written)"))
+        layout.addWidget(label(translate("WorkCal", "File")))
+        layout.addWidget(self.path)
+        layout.addLayout(row(button(translate("WorkCal", "Browse..."), translate("WorkCal", "Choose the file"),
+                                    self.browse),
+                             button(translate("WorkCal", "Export"), self.TIP, self.export, "WorkCalExport")))
+        self.refusal = QtWidgets.QWidget()
+        refusal = QtWidgets.QVBoxLayout(self.refusal)
+        refusal.setContentsMargins(0, 0, 0, 0)
+        self.refusal_text = label(name="WorkCalExportRefusal")
+        self.allow_button = button("", translate("WorkCal", "Allow this tilt for the tool and export again"),
+                                   self.allow_tilt, "WorkCalAllowTilt")
+        self.five_axis_button = button(translate("WorkCal", "Export for 5 axes"),
+                                       translate("WorkCal", "Write G-code with rotary axes for a 5-axis machine"),
+                                       self.use_five_axes, "WorkCalUseFiveAxes")
+        refusal.addWidget(self.refusal_text)
+        refusal.addLayout(row(self.allow_button, self.five_axis_button))
+        layout.addWidget(self.refusal)
+        self.refusal.setVisible(False)
+        self.written = label(name="WorkCalExported")
+        layout.addWidget(self.written)
+        self.format.currentIndexChanged.connect(lambda index: self._format_changed())
+        self.machine.currentIndexChanged.connect(lambda index: self._machine_changed())
+        self._format_changed()
+
+    # ------------------------------------------------------------------ widgets
+    def fmt(self) -> str:
+        return self.format.currentData()
+
+    def machine_profile(self) -> str:
+        return self.machine.currentData()
+
+    def _format_changed(self) -> None:
+        from workcal_wb.core.toolpath import FORMATS
+
+        gcode = self.fmt() == "gcode"
+        self.machine.blockSignals(True)
+        self.machine.clear()
+        for name, words in MACHINES:
+            if (name == "robot") != gcode:
+                self.machine.addItem(words, name)
+        self.machine.blockSignals(False)
+        self.machine.setEnabled(gcode)
+        self._machine_changed()
+        text = self.path.text().strip()
+        if text:
+            self.path.setText(os.path.splitext(text)[0] + FORMATS[self.fmt()].EXTENSION)
+
+    def _machine_changed(self) -> None:
+        for widget in (self.tilt, self.tilt_title):
+            widget.setVisible(self.machine_profile() == "3axis")
+        for widget in (self.rotary, self.rotary_title):
+            widget.setVisible(self.machine_profile() == "5axis-tcp")
+        self.refusal.setVisible(False)
+
+    def set_options(self, fmt=None, machine=None, vertical_tol_deg=None, rotary=None, path=None) -> None:
+        """Set the page's choices as a user would (tests and scripts)."""
+        if fmt is not None:
+            self.format.setCurrentIndex(self.format.findData(fmt))
+        if machine is not None:
+            self.machine.setCurrentIndex(self.machine.findData(machine))
+        if vertical_tol_deg is not None:
+            self.tilt.setValue(float(vertical_tol_deg))
+        if rotary is not None:
+            self.rotary.setCurrentIndex(self.rotary.findData(rotary))
+        if path is not None:
+            self.path.setText(os.fspath(path))
+
+    def options(self) -> dict:
+        machine = self.machine_profile()
+        out = {"machine": machine}
+        if machine == "3axis":
+            out["vertical_tol_deg"] = self.tilt.value()
+        if machine == "5axis-tcp":
+            out["rotary"] = self.rotary.currentData()
+        return out
+
+    def default_path(self) -> str:
+        from workcal_wb.core.toolpath import FORMATS
+        from workcal_wb.fc.toolpath import source_label
+        from workcal_wb.gui.commands.toolpath import start_folder
+
+        source = self.guide.steps["toolpath"].chosen()
+        stem = os.path.splitext(source_label(source))[0] if source is not None else "toolpath"
+        stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in stem) or "toolpath"
+        return os.path.join(start_folder(self.doc), f"{stem}_calibrated{FORMATS[self.fmt()].EXTENSION}")
+
+    def browse(self) -> None:
+        import FreeCADGui
+
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(FreeCADGui.getMainWindow(), translate("WorkCal", "Program"),
+                                                        self.path.text().strip() or self.default_path())
+        if path:
+            self.path.setText(path)
+
+    # ------------------------------------------------------------------ state
+    def state(self) -> tuple:
+        written = self.guide.exported
+        if written:
+            return DONE, translate("WorkCal", "written: {}").format(os.path.basename(written))
+        calibration = self.guide.calibration()
+        if calibration is None or self.guide.steps["toolpath"].chosen() is None:
+            return TODO, translate("WorkCal", "Needs a calibration and the toolpath")
+        return TODO, translate("WorkCal", "Write the program")
+
+    def refresh(self) -> None:
+        if not self.path.text().strip():
+            self.path.setText(self.default_path())
+        self.written.setText(self.state()[1] if self.guide.exported else "")
+
+    # ------------------------------------------------------------------ export
+    def export(self, confirm=None):
+        """Write the program (recorded); forcing is asked for a calibration that is not ok; a tool tilted
+        past what a 3-axis machine allows is explained on the page with its two ways out."""
+        from workcal_wb.core.toolpath import ToolTilted
+        from workcal_wb.gui.commands.toolpath import export_program
+        from workcal_wb.gui.task_panels.common import show_error, with_force
+
+        calibration = self.guide.calibration()
+        path = self.path.text().strip() or self.default_path()
+        self.refusal.setVisible(False)
+        try:
+            job = with_force(lambda force: export_program(calibration, path, self.fmt(), force=force,
+                                                          **self.options()), confirm)
+        except ToolTilted as exc:
+            self.show_tilt(exc)
+            return None
+        except WorkCalError as exc:
+            show_error(translate("WorkCal", "Export robot program"), str(exc))
+            return None
+        if job is not None:
+            self.guide.exported = path
+            self.written.setText(translate("WorkCal", "Written: {} ({} for the {})").format(
+                path, self.format.currentText(), self.machine.currentText().lower()))
+            self.reveal(self.written)
+        self.guide.refresh()
+        return job
+
+    def show_tilt(self, refusal) -> None:
+        needed = math.ceil(refusal.tilt_deg * 100) / 100
+        if refusal.five_axis_path:
+            text = translate("WorkCal", "This toolpath tilts the tool {:.2f} deg: a 3-axis machine cannot follow it. "
+                                        "Export it for a 5-axis machine.").format(refusal.tilt_deg)
+        else:
+            text = translate("WorkCal", "The part sits tilted: W turns the tool {:.3f} deg away from the machine's "
+                                        "Z, more than the {:g} deg allowed for a 3-axis machine. Level the part "
+                                        "(shim it) and calibrate again, allow {:g} deg if your tool can take it, or "
+                                        "export for a 5-axis machine.").format(refusal.tilt_deg,
+                                                                               refusal.tolerance_deg, needed)
+        self.refusal_text.setText(text)
+        self.allow_button.setText(translate("WorkCal", "Allow {:g} deg").format(needed))
+        self.allow_button.setVisible(not refusal.five_axis_path)
+        self.allowed = needed
+        self.refusal.setVisible(True)
+        self.reveal(self.refusal)
+
+    def allow_tilt(self):
+        self.tilt.setValue(self.allowed)
+        return self.export()
+
+    def use_five_axes(self):
+        self.machine.setCurrentIndex(self.machine.findData("5axis-tcp"))
+        return self.export()
+
+    def scene(self):
+        return robot_frame_scene(self)

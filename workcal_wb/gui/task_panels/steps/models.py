@@ -1,0 +1,97 @@
+"""Step 2: the workpiece model (in its own frame) and the reference model (where it stands for the robot)."""
+from __future__ import annotations
+
+import FreeCAD
+
+from .base import DONE, TODO, Scene, Step, button, combo, label
+
+translate = FreeCAD.Qt.translate
+
+ROLES = ("workpiece", "reference")
+
+
+class ModelsStep(Step):
+    NAME = "models"
+    TITLE = translate("WorkCal", "Models")
+    HEADING = translate("WorkCal", "Models: the workpiece and the reference object")
+    TIP = translate("WorkCal", "The workpiece model X-A in its own frame X (the toolpath's), and the reference "
+                               "model B-P placed where the reference object stands in the robot base frame B")
+    WORDS = {"workpiece": (translate("WorkCal", "Workpiece model"),
+                           translate("WorkCal", "The workpiece as designed (X-A), in its own frame X: the frame the "
+                                                "toolpath was computed in")),
+             "reference": (translate("WorkCal", "Reference model"),
+                           translate("WorkCal", "The fixed reference object (B-P), placed where it stands in the robot "
+                                                "base frame B"))}
+
+    def build(self, layout) -> None:
+        self.combos = {}
+        for role in ROLES:
+            title, tip = self.WORDS[role]
+            layout.addWidget(label(title, tip))
+            chooser = combo(f"WorkCal_{role}", tip)
+            chooser.activated.connect(lambda index, r=role: self.run_guarded(
+                translate("WorkCal", "Choose models"), lambda: self.use_chosen(r)))
+            layout.addWidget(chooser)
+            layout.addWidget(button(translate("WorkCal", "From a file..."),
+                                    translate("WorkCal", "STEP, IGES, BREP, STL, OBJ, OFF, PLY or a point file"),
+                                    lambda r=role: self.ask_and_import(r), f"WorkCal_{role}_file"))
+            self.combos[role] = chooser
+        layout.addWidget(label(translate(
+            "WorkCal", "The workpiece model is used in its own frame, the toolpath's. The reference model must "
+                       "stand where the reference object stands for the robot.")))
+
+    def state(self) -> tuple:
+        chosen = self.setup()
+        missing = [self.WORDS[r][0].lower() for r in ROLES if chosen[r] is None]
+        if missing:
+            return TODO, translate("WorkCal", "Choose the {}").format(translate("WorkCal", " and the ").join(missing))
+        return DONE, translate("WorkCal", "workpiece: {}, reference: {}").format(chosen["workpiece"].Label,
+                                                                                chosen["reference"].Label)
+
+    def refresh(self) -> None:
+        from workcal_wb.gui.commands.models import model_candidates
+
+        chosen = self.setup()
+        self.candidates = model_candidates(self.doc)
+        for role, chooser in self.combos.items():
+            chooser.blockSignals(True)
+            chooser.clear()
+            for obj in self.candidates:
+                chooser.addItem(obj.Label, obj.Name)
+            chooser.setCurrentIndex(self.candidates.index(chosen[role]) if chosen[role] in self.candidates else -1)
+            chooser.blockSignals(False)
+
+    def select(self, role: str, obj) -> None:
+        """Choose ``obj`` as the model of ``role`` (recorded), as picking it in the list does."""
+        from workcal_wb.gui.commands.models import choose_models
+
+        choose_models(self.doc, **{role: obj})
+        self.guide.go(self.NAME)
+
+    def use_chosen(self, role: str) -> None:
+        index = self.combos[role].currentIndex()
+        if 0 <= index < len(self.candidates):
+            self.select(role, self.candidates[index])
+
+    def ask_and_import(self, role: str) -> None:
+        from workcal_wb.gui.commands.models import ask_for_model_file
+
+        path = ask_for_model_file()
+        if path:
+            self.load_file(role, path)
+
+    def load_file(self, role: str, path, units: str | None = None):
+        """Read a model file (recorded) and choose it for ``role``."""
+        from workcal_wb.gui.commands.models import import_model
+
+        obj = self.run_guarded(translate("WorkCal", "Model file"), lambda: import_model(path, self.doc, units, role))
+        self.guide.go(self.NAME)
+        return obj
+
+    def scene(self) -> Scene:
+        chosen = self.setup()
+        shown = [chosen[r] for r in ROLES if chosen[r] is not None]
+        words = {"workpiece": translate("WorkCal", "Workpiece model (its own frame)"),
+                 "reference": translate("WorkCal", "Reference model (robot frame)")}
+        return Scene(show=shown, labels=[(words[r], chosen[r]) for r in ROLES if chosen[r] is not None],
+                     orientation="isometric")
