@@ -74,14 +74,16 @@ def _stop(signum, frame):
     raise Stopped(signum)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand, or only of ``command``: a run imports the modules of its own
+    subcommand, not those of the others (a match need not load the toolpath exporters)."""
     parser = _Parser(
         prog="python3 -m workcal_wb",
         description="WorkCal: locate a freeform workpiece for a robot or CNC machine from one 3D scan.",
     )
     parser.add_argument("--version", action="version", version=f"WorkCal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
+    for name in [command] if command in SUBCOMMANDS else SUBCOMMANDS:
         module = importlib.import_module(f"workcal_wb.cli.{name}")
         module.add_parser(sub).set_defaults(run=module.run)
     return parser
@@ -105,7 +107,8 @@ def exit_status(error: BaseException) -> int:
 def main(argv=None) -> int:
     from workcal_wb.core.errors import WorkCalError
 
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv[0] if argv else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a bad argument (argparse has said why)

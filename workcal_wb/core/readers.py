@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import re
 import struct
+import warnings
+from functools import cached_property
 from pathlib import Path
 from typing import NamedTuple
 
@@ -101,6 +103,18 @@ def _check_binary_end(data: bytes, end: int, label: str, declared: int, noun: st
     where = _binary_tail(data, end)
     if where:
         raise _trailing(label, where, declared, noun)
+
+
+def _numbers(text: bytes, count: int) -> np.ndarray | None:
+    """The ``count`` whitespace-separated numbers of ``text`` parsed at once, or None when they are
+    not that many numbers (some token is not one: the caller names it)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # numpy warns, and will raise, when a token is not a number
+        try:
+            values = np.fromstring(text, dtype=np.float64, sep=" ")
+        except ValueError:
+            return None
+    return values if len(values) == count else None
 
 
 def _line_of_token(text: bytes, index: int) -> int:
@@ -242,7 +256,7 @@ def _parse_ply(data: bytes, label: str) -> _Parsed:
                                if p.name in _PLY_FACE_LISTS and p.length_type), None)
     wanted = {"vertex"} | ({"face"} if face_list else set())
     if header.byte_order is None:
-        body = _AsciiPlyBody(data[header.body_start:].split(), label)
+        body = _AsciiPlyBody(data[header.body_start:], label)
     else:
         body = _BinaryPlyBody(data, header.byte_order, label)
     values, pos = {}, header.body_start if header.byte_order else 0
@@ -327,7 +341,11 @@ def _ply_element(body, element: _PlyElement, pos: int, keep: bool):
 
 
 def _walk_list_lengths(body, element: _PlyElement, pos: int, count: int) -> np.ndarray:
-    """(count, number of lists) list lengths, read record by record (the only way through them)."""
+    """(count, number of lists) list lengths, read record by record (the only way through them, but
+    for ASCII records one per line)."""
+    by_lines = body.line_list_lengths(element, pos, count)
+    if by_lines is not None:
+        return by_lines
     if not any(prop.length_type for prop in element.properties):  # fixed size: no walk needed
         size = sum(body.width(prop.type) for prop in element.properties)
         if size * count > body.end - pos:
@@ -386,11 +404,43 @@ def _ragged_positions(starts: np.ndarray, lengths: np.ndarray, step: int) -> np.
     return np.repeat(starts, lengths) + within * step
 
 
-class _AsciiPlyBody:
-    """ASCII PLY data as one token stream (records may wrap lines, as rply allows)."""
+_WHITESPACE = np.zeros(256, bool)
+_WHITESPACE[list(b" \t\n\r\x0b\x0c")] = True  # what bytes.split() splits on
 
-    def __init__(self, tokens: list[bytes], label: str):
-        self.tokens, self.label, self.end = tokens, label, len(tokens)
+
+class _AsciiPlyBody:
+    """ASCII PLY data as one token stream (records may wrap lines, as rply allows).
+
+    Tokens are located with numpy and a run of them is parsed as numbers at once (``numbers``); their
+    text is split out only when one is not a number, to name it.  Where every record of an element
+    with one list is one line, the usual layout, its list lengths are read from the lines' lengths
+    at once instead of record by record (a Cyberware range_grid has 200k records).
+    """
+
+    def __init__(self, body: bytes, label: str):
+        self.body, self.label = body, label
+        self.raw = np.frombuffer(body, np.uint8)
+        edges = np.diff(np.concatenate([[1], _WHITESPACE[self.raw], [1]]).astype(np.int8))
+        self.starts, self.ends = np.flatnonzero(edges == -1), np.flatnonzero(edges == 1)  # each token's bytes
+        self.end = len(self.starts)
+        self._by_lines = {}
+
+    @cached_property
+    def tokens(self) -> list[bytes]:
+        return self.body.split()
+
+    @cached_property
+    def _line_firsts(self) -> np.ndarray:
+        """The index of each token that is the first on its line."""
+        newlines = np.cumsum(self.raw == 10, dtype=np.int64)
+        after_newline = newlines[self.starts[1:] - 1] > newlines[self.ends[:-1] - 1]
+        return np.flatnonzero(np.r_[True, after_newline])
+
+    def numbers(self, pos: int, end: int) -> np.ndarray | None:
+        """Tokens ``pos`` to ``end`` as float64, parsed at once; None when one is not a number."""
+        if end <= pos:
+            return np.zeros(0)
+        return _numbers(self.body[self.starts[pos]:self.ends[end - 1]], end - pos)
 
     @staticmethod
     def width(_type: str) -> int:
@@ -402,13 +452,51 @@ class _AsciiPlyBody:
             raise InputError(f"{self.label}: list length {token.decode('latin-1')!r} is not a whole number")
         return int(token)
 
+    def line_list_lengths(self, element, pos: int, count: int) -> np.ndarray | None:
+        """(count, 1) list lengths of an element with one list whose ``count`` records from token ``pos``
+        are one line each (each line as long as its list length, written plainly, says), or None
+        when they are not: then the records are walked one by one."""
+        key = (element.name, pos, count)
+        if key not in self._by_lines:
+            self._by_lines[key] = self._line_list_lengths(element, pos, count)
+        return self._by_lines[key]
+
+    def _line_list_lengths(self, element, pos: int, count: int) -> np.ndarray | None:
+        columns = list(_with_list_columns(element))
+        listed = [i for i, (_, column) in enumerate(columns) if column is not None]
+        if len(listed) != 1 or count == 0:
+            return None
+        firsts = self._line_firsts
+        k = int(np.searchsorted(firsts, pos))
+        if k + count > len(firsts) or firsts[k] != pos:
+            return None
+        starts = firsts[k:k + count]
+        lengths = np.append(firsts[k + 1:k + count], firsts[k + count] if k + count < len(firsts) else self.end)
+        lengths -= starts + len(columns)
+        at = starts + listed[0]
+        short = lengths < 10
+        if (lengths < 0).any() or not np.array_equal(self.raw[self.starts[at[short]]], 48 + lengths[short]) \
+                or not (self.ends[at[short]] - self.starts[at[short]] == 1).all():
+            return None
+        for token, length in zip(at[~short].tolist(), lengths[~short].tolist()):
+            if self.body[self.starts[token]:self.ends[token]] != str(length).encode():
+                return None
+        return lengths[:, None]
+
     def fixed_records(self, element, pos, first_lengths, keep):
         width = sum(1 if column is None else 1 + first_lengths[column]
                     for _, column in _with_list_columns(element))
         end = pos + element.count * width
         if end > self.end:
             return None
-        table = np.array(self.tokens[pos:end]).reshape(element.count, width)
+        if first_lengths.size:  # one length for all records?  The lines may tell without parsing them.
+            by_lines = self.line_list_lengths(element, pos, element.count)
+            if by_lines is not None and not (by_lines == first_lengths).all():
+                return None
+            if by_lines is not None and not keep:
+                return None, end
+        table = self.numbers(pos, end)
+        table = (np.array(self.tokens[pos:end]) if table is None else table).reshape(element.count, width)
         values, column_start = {}, 0
         for prop, column in _with_list_columns(element):
             if column is None:
@@ -430,7 +518,8 @@ class _AsciiPlyBody:
         offsets, end = _record_offsets(self, element, pos, lengths)
         if not keep:
             return None, end
-        tokens = np.array(self.tokens[pos:end])
+        tokens = self.numbers(pos, end)
+        tokens = np.array(self.tokens[pos:end]) if tokens is None else tokens
         values = {}
         for prop, column in _with_list_columns(element):
             where = offsets[prop.name] - pos
@@ -450,6 +539,10 @@ class _BinaryPlyBody:
     @staticmethod
     def width(type_code: str) -> int:
         return int(type_code[1])
+
+    @staticmethod
+    def line_list_lengths(element, pos: int, count: int) -> None:
+        return None  # binary records have no lines
 
     def length_at(self, pos: int, type_code: str) -> int:
         (value,) = struct.unpack_from(self.byte_order + _STRUCT_CODES[type_code], self.data, pos)
