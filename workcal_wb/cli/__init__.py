@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:
         stopped_by = getattr(exc, "signum", signal.SIGINT)
         print(f"workcal {args.command}: {'interrupted' if stopped_by == signal.SIGINT else 'terminated'}; "
-              "outputs are as before the run", file=sys.stderr)
+              f"{getattr(exc, 'outputs', 'outputs are as before the run')}", file=sys.stderr)
         return exit_status(exc)
     except WorkCalError as exc:
         print(f"workcal {args.command}: error: {exc}", file=sys.stderr)

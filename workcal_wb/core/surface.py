@@ -92,7 +92,8 @@ class NearestGrid:
 
     def _cells(self, points: np.ndarray):
         c = np.floor((points - self.lo) / self.cell).astype(np.int64)
-        inside = np.all((c >= 0) & (c < self.dims), axis=1)
+        unsigned = c.view(np.uint64)  # a negative index becomes huge: one comparison per axis tests both ends
+        inside = (unsigned[:, 0] < self.dims[0]) & (unsigned[:, 1] < self.dims[1]) & (unsigned[:, 2] < self.dims[2])
         return (c[:, 0] * self.dims[1] + c[:, 1]) * self.dims[2] + c[:, 2], inside
 
     def _fill(self, cells: np.ndarray) -> None:
@@ -247,7 +248,7 @@ class SurfaceModel:
         idx = self.grid_level(level).lookup(points)
         found = idx >= 0
         idx = np.where(found, idx, 0)
-        d = np.linalg.norm(points - self.points[idx], axis=1)
+        d = pointops.lengths(points - self.points[idx])
         found &= d <= gate
         return d, idx, found
 
