@@ -14,7 +14,7 @@ from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.outputs import OutputFolder
-from workcal_wb.core.readers import read_cloud
+from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
 from workcal_wb.core.result import FAILED, OK
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
@@ -122,7 +122,7 @@ def run(args) -> int:
     inputs = [*args.scan, args.workpiece, args.reference, args.toolpath, args.workpiece_indices, args.reference_indices]
     cache = model_cache(args)
     with OutputFolder(args.out, "calibrate", OUTPUTS, keep=[p for p in inputs if p]) as outputs:
-        scans = [read_cloud(f, units=args.units, unit_option="--units") for f in args.scan]
+        scans = [read_cloud(f, units=args.units, unit_option="--units", max_points=LARGE_SCAN_POINTS) for f in args.scan]
         model_units = args.model_units or args.units
         workpiece = read_model(args.workpiece, model_units, cache, args.seed)
         reference = read_model(args.reference, model_units, cache, args.seed)

@@ -8,7 +8,7 @@ from workcal_wb.cli import EXIT_FAILED, EXIT_OK
 from workcal_wb.cli.arguments import add_cache_options, finite, input_file, keep_models, model_cache, positive, seed
 from workcal_wb.core.match import METHODS, match
 from workcal_wb.core.outputs import check_file
-from workcal_wb.core.readers import read_cloud
+from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
 from workcal_wb.core.result import FAILED
 from workcal_wb.core.units import mm_per_unit
 
@@ -42,7 +42,7 @@ def run(args) -> int:
     if args.json:
         check_file(args.json)
     cache = model_cache(args)
-    scan = read_cloud(args.scan, units=args.units, unit_option="--units")
+    scan = read_cloud(args.scan, units=args.units, unit_option="--units", max_points=LARGE_SCAN_POINTS)
     model = cache.model_file(args.model, units=args.model_units or args.units, seed=args.seed,
                              unit_option="--model-units")
     for warning in scan.warnings + model.warnings:

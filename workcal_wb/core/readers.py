@@ -6,6 +6,7 @@ Python loops only walk records whose length varies (mixed polygons, Cyberware ``
 """
 from __future__ import annotations
 
+import os
 import re
 import struct
 import warnings
@@ -37,12 +38,15 @@ class _Parsed(NamedTuple):
     warnings: tuple[str, ...] = ()
 
 
-def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit") -> Cloud:
+def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit",
+               max_points: int | None = None) -> Cloud:
     """Read a point cloud or mesh file into a checked ``Cloud`` in mm.
 
     ``units`` is the file's length unit; ``None`` uses the ``comment units`` line of a PLY written by
     WorkCal (mm when there is none).  ``name`` defaults to the file name.  ``unit_option`` is how the
     caller's user sets the unit (e.g. "--model-units"), named in a warning about a suspect size.
+    ``max_points``: a binary PLY point cloud holding more points is read in chunks and thinned as it
+    is read (``_thinned_ply``), so it is never in memory whole; a warning says so.
     """
     path = Path(path)
     parse = _PARSERS.get(path.suffix.lower())
@@ -51,12 +55,15 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_opt
                          f"WorkCal reads {', '.join(_PARSERS)}")
     scale = None if units is None else mm_per_unit(units)  # a bad unit is refused before reading
     label = str(path)
-    data = read_bytes(path)
-    try:
-        parsed = parse(data, label)
-    except (ValueError, IndexError, struct.error, OverflowError) as exc:
-        # Parsers report every problem they know of; this keeps an unforeseen one an InputError.
-        raise InputError(f"{label}: cannot be read as a {path.suffix.lower()} file ({exc})") from None
+    parsed = _thinned_ply(path, label, max_points) if max_points and parse is _parse_ply else None
+    if parsed is None:
+        data = read_bytes(path)
+        try:
+            parsed = parse(data, label)
+        except (ValueError, IndexError, struct.error, OverflowError) as exc:
+            # Parsers report every problem they know of; this keeps an unforeseen one an InputError.
+            raise InputError(f"{label}: cannot be read as a {path.suffix.lower()} file ({exc})") from None
+        del data
     if scale is None:
         units = parsed.units or "mm"
         try:
@@ -714,6 +721,94 @@ def _lzf_decompress(block: bytes, expected: int, label: str) -> bytes:
     if pos != len(block) or len(out) != expected:
         raise InputError(f"{label}: the binary_compressed (LZF) data is corrupt")
     return bytes(out)
+
+
+# --- large scans: thinned while they are read -------------------------------------------------
+
+# A scan with more points than this is thinned on reading by the commands (a few million points fix a
+# pose as well as tens of millions, and memory stays bounded); thinning aims at half of it.
+LARGE_SCAN_POINTS = 6_000_000
+THIN_CHUNK = 1 << 20  # records read at a time
+_KEY_BITS = 21  # voxel index bits per axis
+
+
+def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
+    """A binary PLY holding only vertices, more than ``max_points`` of them, read in chunks of
+    THIN_CHUNK records and thinned as it is read: one point per voxel (the first in the file, a real
+    measurement with its normal), the voxel grown by sqrt(2) whenever more than max_points / 2 are
+    kept, so memory stays bounded whatever the file holds.  None for any other file (read whole as
+    usual).  The counts are checked both ways as for any PLY."""
+    from .files import checked_input
+
+    checked_input(path)
+    with open(path, "rb") as fh:
+        header = _ply_header(fh.read(_MAX_HEADER_BYTES), label)
+        (vertex, *others) = header.elements
+        names = [p.name for p in vertex.properties]
+        if (header.byte_order is None or others or vertex.name != "vertex" or vertex.count <= max_points
+                or any(p.length_type for p in vertex.properties) or not {"x", "y", "z"} <= set(names)):
+            return None  # (the whole-file reader names what is missing or wrong)
+        record = np.dtype([(p.name, header.byte_order + p.type) for p in vertex.properties])
+        size = os.fstat(fh.fileno()).st_size
+        end = header.body_start + vertex.count * record.itemsize
+        if size < end:
+            raise _truncated(label, vertex.count, "vertices", (size - header.body_start) // record.itemsize)
+        fh.seek(end)
+        if fh.read(3) not in (b"", b"\n", b"\r\n"):
+            raise _trailing(label, f"byte {end} ({size - end} bytes more)", vertex.count, "vertices")
+        fh.seek(header.body_start)
+        columns = ["x", "y", "z"] + (["nx", "ny", "nz"] if {"nx", "ny", "nz"} <= set(names) else [])
+        grid, parts, count, dropped = None, [], 0, 0
+        for start in range(0, vertex.count, THIN_CHUNK):
+            chunk = np.fromfile(fh, record, min(THIN_CHUNK, vertex.count - start))
+            values = np.column_stack([chunk[name] for name in columns]).astype(np.float64)
+            del chunk
+            finite = np.isfinite(values).all(axis=1)
+            dropped += len(values) - int(finite.sum())
+            values, index = values[finite], start + np.flatnonzero(finite)
+            if grid is None and len(values) >= 100:
+                grid = _ThinningGrid(values[:, :3], vertex.count, max_points // 2)
+            if grid is not None:
+                values, index = grid.first_per_voxel(values, index)
+            parts.append((values, index))
+            count += len(index)
+            if grid is not None and count > max_points // 2:  # voxels met in several chunks counted once,
+                values, index = grid.first_per_voxel(*(np.concatenate(part) for part in zip(*parts)))
+                while len(index) > max_points // 2:  # and while too many are kept, a coarser grid for all
+                    grid.voxel *= np.sqrt(2.0)
+                    values, index = grid.first_per_voxel(values, index)
+                parts, count = [(values, index)], len(index)
+    values, index = (np.concatenate(part) for part in zip(*parts))
+    if grid is not None:
+        values, index = grid.first_per_voxel(values, index)  # a voxel met in several chunks: its first point
+    warnings = [f"{label}: {vertex.count:,} points, more than the {max_points:,} read whole: thinned while "
+                f"reading to {len(index):,}, one point kept per voxel of "
+                f"{grid.voxel if grid is not None else 0:.3g} (the file's units)"]
+    if dropped:
+        warnings.append(f"{label}: ignored {dropped} points with NaN or infinite coordinates")
+    return _Parsed(values[:, :3], values[:, 3:] if values.shape[1] == 6 else None, None, header.units,
+                   tuple(warnings))
+
+
+class _ThinningGrid:
+    """Voxels fixed to the first chunk's corner, sized so that a surface sampled like that chunk keeps
+    about ``target`` points of ``total`` (points on a surface thin as the square of the voxel)."""
+
+    def __init__(self, points: np.ndarray, total: int, target: int):
+        from .pointops import median_spacing
+
+        self.corner = points.min(axis=0)
+        self.voxel = max(median_spacing(points) * np.sqrt(total / target), 1e-9)
+
+    def first_per_voxel(self, values: np.ndarray, index: np.ndarray):
+        """(values, file indices) of the first point (in file order: ``index`` ascends) in each voxel;
+        points beyond the grid's reach (stray points far away) are all kept."""
+        cells = np.floor((values[:, :3] - self.corner) / self.voxel) + (1 << (_KEY_BITS - 1))
+        inside = ((cells >= 0) & (cells < 1 << _KEY_BITS)).all(axis=1)
+        cells = np.where(inside[:, None], cells, 0).astype(np.int64)
+        keys = np.where(inside, (cells[:, 0] << 2 * _KEY_BITS) | (cells[:, 1] << _KEY_BITS) | cells[:, 2], -1 - index)
+        first = np.sort(np.unique(keys, return_index=True)[1])
+        return values[first], index[first]
 
 
 # --- text point clouds --------------------------------------------------------------------------
