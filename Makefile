@@ -5,26 +5,32 @@ BUILD         := $(CURDIR)/build
 FREECAD_HOME  := $(BUILD)/freecad-home
 DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
-                 python3-hypothesis xvfb xauth libgl1-mesa-dri
+                 python3-hypothesis python3-pip xvfb xauth libgl1-mesa-dri
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
-FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output
+FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
+                 WORKCAL_REQUIRE_PYE57=1
 XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts clean
+.PHONY: setup python-packages demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
+        bench-scenes clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
 	@mkdir -p $(FREECAD_HOME)/Mod
 	@ln -sfn $(CURDIR) $(FREECAD_HOME)/Mod/WorkCal
 
+# pye57 (E57 scans; not a Debian package) into the folder FreeCAD adds to sys.path in the throw-away home.
+python-packages: setup
+	@.ci/install-python-packages $(FREECAD_HOME) pye57 pyquaternion
+
 demo: setup
 	$(PYTHON) -m workcal_wb demo --out $(DEMO_DIR)
 
 test: test-headless test-gui
 
-test-headless: setup
+test-headless: setup python-packages
 	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
 	rc = pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()); sys.stdout.flush(); sys.exit(rc)"
 
@@ -47,6 +53,10 @@ bench: setup
 # Only the verdicts table (a few minutes), replacing its section of docs/benchmarks.md.
 bench-verdicts: setup
 	$(PYTHON) -m workcal_wb bench --only verdicts --out $(CURDIR)/docs/benchmarks.md
+
+# Only the scenes table (cell scans calibrated with automatic regions), replacing its section of docs/benchmarks.md.
+bench-scenes: setup
+	$(PYTHON) -m workcal_wb bench --only scenes --out $(CURDIR)/docs/benchmarks.md
 
 # Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:

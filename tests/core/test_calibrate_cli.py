@@ -80,3 +80,26 @@ def test_demo_runs_the_whole_job(tmp_path, capsys):
     for name in ("result.json", "report.html", "toolpath_calibrated.nc", "toolpath_calibrated.src"):
         assert (tmp_path / name).exists(), name
     assert "error against the known truth" in capsys.readouterr().out
+
+
+def test_scanner_origin_and_up_options_reach_the_calibration(monkeypatch, tmp_path):
+    """--scanner-origin and --up are checked by argparse and handed to the calibration as options."""
+    from workcal_wb.cli import build_parser
+    from workcal_wb.cli import calibrate as command
+
+    scan = tmp_path / "scan.xyz"
+    scan.write_text("0 0 0\n1 0 0\n0 1 0\n0 0 1\n")
+    args = build_parser().parse_args(["calibrate", "--scan", str(scan), "--workpiece", str(scan), "--reference",
+                                      str(scan), "--scanner-origin", "1", "-2", "3e2", "--up", "0", "0", "1"])
+    seen = {}
+
+    def fake(scans, workpiece, reference, *, regions=None, toolpath_points=None, options=None):
+        seen["options"] = options
+        raise SystemExit(0)
+
+    monkeypatch.setattr(command, "calibrate", fake)
+    with pytest.raises(SystemExit):
+        command.run(args)
+    assert seen["options"].scanner_origin == (1.0, -2.0, 300.0) and seen["options"].up == (0.0, 0.0, 1.0)
+    assert build_parser().parse_args(["calibrate", "--scan", str(scan), "--workpiece", str(scan), "--reference",
+                                      str(scan)]).up is None

@@ -439,7 +439,7 @@ def pcd_xyz(encoding, declared, data):
 
 BAD_FILES = {  # name: (file name, content, what the message must say)
     "empty": ("scan.ply", b"", "empty"),
-    "unknown extension": ("scan.e57", b"1 2 3\n", "WorkCal reads .ply, .pcd"),
+    "unknown extension": ("scan.las", b"1 2 3\n", "WorkCal reads .ply, .pcd, .e57"),
     "not a ply": ("scan.ply", b"1 2 3\n", "not a PLY file"),
     "no end_header": ("scan.ply", VERTEX_HEADER.format("ascii", 1) + "1 2 3\n", "no end_header"),
     "no format": ("scan.ply", "ply\nelement vertex 1\nproperty float x\nend_header\n1\n", "no 'format"),

@@ -315,3 +315,18 @@ def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     finally:
         co.run = original
     assert calls == []
+
+
+def test_scanner_origin_and_up_are_document_inputs(simulated, document):
+    """Where the scanner stood and which way is up, in the scan's coordinates: inputs of the document
+    (the GUI's advanced options), stored on the object and used when it recomputes."""
+    scene, scan = simulated
+    doc, o = document
+    up = tuple(float(v) for v in scan.V[:3, :3] @ np.array([0.0, 0.0, 1.0]))
+    obj = co.make_calibration(doc, o["scan"], o["workpiece"], o["reference"], scanner_origin=(0.0, 0.0, 0.0), up=up,
+                              resamples=2)
+    assert obj.ScannerOriginGiven and tuple(obj.Up) == pytest.approx(up)
+    options = co.options_of(obj)
+    assert options.scanner_origin == (0.0, 0.0, 0.0) and options.up == pytest.approx(up)
+    assert obj.Status == "ok"
+    assert_pose(matrix(obj.W), scene.W)

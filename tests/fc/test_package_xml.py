@@ -76,7 +76,8 @@ def test_python_dependencies(workbench):
     # Packages off the Addon Manager's allow-list must be optional, or it refuses to install WorkCal.
     ns = {"p": "https://wiki.freecad.org/Package_Metadata"}
     depends = ET.parse(ROOT / "package.xml").getroot().findall(".//p:workbench/p:depend", ns)
-    assert {d.text: d.get("optional") for d in depends if d.text == "open3d"} == {"open3d": "true"}
+    assert {d.text: d.get("optional") for d in depends if d.text in ("open3d", "pye57")} == {"open3d": "true",
+                                                                                           "pye57": "true"}
 
 
 def test_author_and_maintainer(metadata):

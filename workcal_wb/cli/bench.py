@@ -23,9 +23,10 @@ def add_parser(subparsers):
                     "Exit status 1 when WorkCal misses a target or reports a wrong pose as ok.")
     p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
     p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
-    p.add_argument("--only", choices=("verdicts",),
+    p.add_argument("--only", choices=("verdicts", "scenes"),
                    help="run only this table and replace its section of FILE (verdicts: how often each match status "
-                        "comes with the right pose, on real scans and nearly symmetric parts)")
+                        "comes with the right pose, on real scans and nearly symmetric parts; scenes: cell scans in "
+                        "any frame, touching objects, any view, calibrated with automatic regions)")
     p.add_argument("--seed", type=seed, default=0, help="seed for the case generation and the matchers")
     p.add_argument("--shared", metavar="DIR", type=Path,
                    default=Path(os.environ.get("WORKCAL_SHARED", DEFAULT_SHARED)),

@@ -35,7 +35,7 @@ def add_parser(subparsers):
                     "with --toolpath, the calibrated program.  The outputs replace the previous run's as one set "
                     "(manifest.json lists them with their SHA-256); a failed run leaves no program.")
     p.add_argument("--scan", nargs="+", required=True, metavar="FILE", type=input_file,
-                   help="scene scan(s) from one scanner position (PLY, PCD, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
+                   help="scene scan(s) from one scanner position (PLY, PCD, E57, XYZ/ASC/PTS/CSV, STL/OBJ/OFF)")
     p.add_argument("--workpiece", required=True, metavar="FILE", type=input_file,
                    help="workpiece model X-A (mesh, point cloud, or STEP/IGES/BREP when run in freecadcmd)")
     p.add_argument("--reference", required=True, metavar="FILE", type=input_file,
@@ -55,6 +55,12 @@ def add_parser(subparsers):
                        help=f"{role} region as a text file of scan point indices (0-based); needs the other region too")
         p.add_argument(f"--{role}-box", type=finite, nargs=6, metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
                        help=f"{role} region as a box in scanner coordinates, mm")
+    p.add_argument("--scanner-origin", type=finite, nargs=3, metavar=("X", "Y", "Z"),
+                   help="where the scanner stood, in the scan's coordinates (mm): says which side of the platform is up "
+                        "and lets free space rule out poses (default: from the file, PCD VIEWPOINT, E57 poses or a PLY "
+                        "'comment viewpoint X Y Z', else estimated)")
+    p.add_argument("--up", type=finite, nargs=3, metavar=("X", "Y", "Z"),
+                   help="the platform's up direction in the scan's coordinates (default: from the data, any frame)")
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
     add_machine_options(p)
@@ -129,7 +135,8 @@ def run(args) -> int:
         warn([*scans, workpiece, reference])
         toolpath = read_gcode(args.toolpath, **read_options(args)) if args.toolpath else None
         merged = merge_scans(scans)
-        options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed)
+        options = CalibrationOptions(tolerance_mm=args.tolerance, method=args.method, seed=args.seed,
+                                     scanner_origin=args.scanner_origin, up=args.up)
         result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
                            toolpath_points=None if toolpath is None else path_points(toolpath)[0])
 

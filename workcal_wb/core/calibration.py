@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import frames
+from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .match import METHODS, MatchOptions, match, match_pose
-from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, locate, match_trusted
+from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -31,6 +31,10 @@ class CalibrationOptions:
     method: str = "robust"
     resamples: int = 6  # bootstrap refits of both matches for the uncertainty
     seed: int = 0
+    # Where the scanner stood and which way is up, in the scan's frame (mm; a direction), when the user
+    # knows; otherwise the scan's file tells the scanner's position, or both come from the data.
+    scanner_origin: tuple | None = None
+    up: tuple | None = None
 
     def __post_init__(self):
         if not (isinstance(self.tolerance_mm, (int, float)) and math.isfinite(self.tolerance_mm)
@@ -42,6 +46,15 @@ class CalibrationOptions:
             raise InputError(f"resamples must be a whole number of at least 1, not {self.resamples}")
         if not (isinstance(self.seed, int) and 0 <= self.seed < 2**63):
             raise InputError(f"seed must be a whole number from 0 to 2**63 - 1, not {self.seed}")
+        for name, words in (("scanner_origin", "three finite coordinates in mm"),
+                            ("up", "three finite numbers, not all zero (a direction)")):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            vector = np.asarray(value, dtype=float) if np.shape(value) == (3,) else None
+            if vector is None or not np.isfinite(vector).all() or (name == "up" and not np.linalg.norm(vector) > 0):
+                raise InputError(f"{name.replace('_', ' ')} must be {words}, not {value!r}")
+            object.__setattr__(self, name, tuple(float(v) for v in vector))
 
 
 # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
@@ -74,12 +87,15 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
     match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed)
+    if scanner_origin(scan, options) is not None:  # the matches judge their views from where the scanner stood
+        match_options["viewpoint"] = tuple(scanner_origin(scan, options))
     warnings = list(scan.warnings)
 
     if regions is None:
         try:
             found = locate(scan, workpiece_surface, reference_surface, options.tolerance_mm, options.seed,
-                           progress=lambda f, m: report(0.6 * f, m))
+                           progress=lambda f, m: report(0.6 * f, m), up=options.up,
+                           viewpoint=scanner_origin(scan, options))
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
             return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
                                      tolerance_mm=options.tolerance_mm, seed=options.seed,
@@ -101,6 +117,12 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         U_match = match_trusted(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface,
                                 match_options, "workpiece")
 
+    report(0.7, "weighing the poses by contact with the platform and free space")
+    scene = _physics_scene(scan, options, found.plane if regions is None else None)
+    U_match, V_match = (physics.decide(m, surface, scene, role, refit=lambda U, idx=region_idx[role], s=surface, r=role:
+                                       match(_region_cloud(scan, idx, r), s, init=U, **match_options))
+                        for m, surface, role in ((U_match, workpiece_surface, "workpiece"),
+                                                 (V_match, reference_surface, "reference")))
     result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
                   inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
                   regions={**{k: np.asarray(v, dtype=np.int64) for k, v in region_idx.items()}, "source": source},
@@ -124,6 +146,30 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                              time_s=time.perf_counter() - started, **result)
 
 
+def _physics_scene(scan: Cloud, options: CalibrationOptions, platform) -> physics.Scene:
+    """The whole scan as the physical constraints see it: its points, the platform (found with the
+    regions, or now for regions the user gave) and the scanner positions the user or the file gives."""
+    valid = np.isfinite(scan.points).all(axis=1)
+    points = scan.points[valid]
+    spacing = pointops.median_spacing(points, seed=options.seed)
+    if platform is None:
+        platform = find_platform(points, spacing, np.random.default_rng(options.seed), options.up,
+                                 scanner_origin(scan, options))
+    if options.scanner_origin is not None:
+        return physics.Scene(points, spacing, platform, np.asarray([options.scanner_origin]))
+    sensor_of = scan.sensor_indices()
+    return physics.Scene(points, spacing, platform, scan.sensors, None if sensor_of is None else sensor_of[valid])
+
+
+def scanner_origin(scan: Cloud, options: CalibrationOptions):
+    """The scanner's position in the scan's frame, when the user or the file tells one position."""
+    if options.scanner_origin is not None:
+        return np.asarray(options.scanner_origin)
+    if scan.sensors is not None and len(scan.sensors) == 1:
+        return scan.sensors[0]
+    return None
+
+
 def merge_scans(scans) -> Cloud:
     """Captures from one scanner position, as one cloud; captures in different units are refused."""
     clouds = [scans] if isinstance(scans, Cloud) else list(scans)
@@ -139,7 +185,13 @@ def merge_scans(scans) -> Cloud:
     if len(clouds) == 1:
         return clouds[0]
     points = np.vstack([c.points for c in clouds])
-    return Cloud(points, name=" + ".join(c.name for c in clouds), warnings=[w for c in clouds for w in c.warnings])
+    sensors, sensor_of = None, None
+    if all(c.sensors is not None for c in clouds):  # each capture's own sensor positions, numbered on
+        offsets = np.cumsum([0] + [len(c.sensors) for c in clouds])
+        sensors = np.vstack([c.sensors for c in clouds])
+        sensor_of = np.concatenate([c.sensor_indices() + k for c, k in zip(clouds, offsets)])
+    return Cloud(points, name=" + ".join(c.name for c in clouds), warnings=[w for c in clouds for w in c.warnings],
+                 sensors=sensors, sensor_of=sensor_of)
 
 
 def _checked_toolpath(points, surface: SurfaceModel) -> np.ndarray:
@@ -177,14 +229,7 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
 
 
 def _refit(scan, idx, surface, found: MatchResult, options: dict, role: str) -> MatchResult:
-    """The match on the final region, started from the pose found while locating it; its candidates
-    and ambiguity come from the global search that found it."""
-    refit = match(_region_cloud(scan, idx, role), surface, init=found.matrix, **options)
-    if refit.status == OK and found.status == AMBIGUOUS:
-        refit.status, refit.reasons, refit.candidates = AMBIGUOUS, found.reasons, found.candidates
-    refit.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **refit.timings_s}
-    refit.time_s += found.time_s
-    return refit
+    return refit(_region_cloud(scan, idx, role), surface, found, options)
 
 
 def _inputs(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toolpath_points) -> dict:

@@ -33,7 +33,8 @@ def as_transform(matrix, name: str = "transform") -> np.ndarray:
     if not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9):
         raise ValueError(f"{name}: last row must be 0 0 0 1, got {T[3].tolist()}")
     R = T[:3, :3]
-    if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+    # Entries of a rotation lie in [-1, 1]; checked first so that a huge one cannot overflow the product.
+    if np.abs(R).max() > 1 + 1e-6 or not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
         raise ValueError(f"{name}: upper-left 3x3 is not a rotation (orthonormal, det +1)")
     return T
 

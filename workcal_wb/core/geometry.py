@@ -16,13 +16,17 @@ MAX_COORDINATE_MM = 1e9
 @dataclass
 class Cloud:
     """A scan or a model.  ``triangles`` is set when the points are the vertices of a mesh, so the
-    model can be matched as a surface rather than as its vertices."""
+    model can be matched as a surface rather than as its vertices.  ``sensors``, when a scan's file
+    tells them, are the scanner positions (k x 3, mm, the points' frame) and ``sensor_of`` which of
+    them saw each point (None: the first saw all)."""
 
     points: np.ndarray
     normals: np.ndarray | None = None
     triangles: np.ndarray | None = None
     name: str = "cloud"
     warnings: list[str] = field(default_factory=list)
+    sensors: np.ndarray | None = None
+    sensor_of: np.ndarray | None = None
     # CRC-32 of the arrays as ``checked`` passed them: a cloud checked once is not sorted for duplicates
     # again (seconds for millions of points) unless its data changed since.
     verified: int | None = field(default=None, repr=False, compare=False)
@@ -33,6 +37,10 @@ class Cloud:
             self.normals = np.ascontiguousarray(self.normals, dtype=float).reshape(-1, 3)
         if self.triangles is not None:
             self.triangles = np.ascontiguousarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+        if self.sensors is not None:
+            self.sensors = np.ascontiguousarray(self.sensors, dtype=float).reshape(-1, 3)
+        if self.sensor_of is not None:
+            self.sensor_of = np.ascontiguousarray(self.sensor_of, dtype=np.int64).reshape(-1)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -51,13 +59,22 @@ class Cloud:
         """The selected points (as a point cloud: triangles do not survive a subset)."""
         idx = np.asarray(indices)
         normals = None if self.normals is None else self.normals[idx]
-        return Cloud(self.points[idx], normals, None, name or self.name, list(self.warnings))
+        return Cloud(self.points[idx], normals, None, name or self.name, list(self.warnings), self.sensors,
+                     None if self.sensor_of is None else self.sensor_of[idx])
 
     def transformed(self, T: np.ndarray) -> "Cloud":
         from .frames import apply, apply_vectors
 
         normals = None if self.normals is None else apply_vectors(T, self.normals)
-        return Cloud(apply(T, self.points), normals, self.triangles, self.name, list(self.warnings))
+        sensors = None if self.sensors is None else apply(T, self.sensors)
+        return Cloud(apply(T, self.points), normals, self.triangles, self.name, list(self.warnings), sensors,
+                     self.sensor_of)
+
+    def sensor_indices(self) -> np.ndarray | None:
+        """Which of ``sensors`` saw each point (None without sensors)."""
+        if self.sensors is None:
+            return None
+        return np.zeros(len(self.points), dtype=np.int64) if self.sensor_of is None else self.sensor_of
 
 
 def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
@@ -84,7 +101,8 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         if bad.any():
             raise InputError(f"{cloud.name}: faces refer to vertices that do not exist "
                              f"(indices outside 0..{len(pts) - 1})")
-        return _verified(Cloud(pts, cloud.normals, cloud.triangles, cloud.name, warnings))
+        return _verified(Cloud(pts, cloud.normals, cloud.triangles, cloud.name, warnings, cloud.sensors,
+                               cloud.sensor_of))
     keep = np.flatnonzero(finite)
     if len(keep) < len(pts):
         warnings.append(f"{cloud.name}: ignored {len(pts) - len(keep)} points with NaN or infinite coordinates "
@@ -99,9 +117,10 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
     if len(keep) < min_points:
         raise InputError(f"{cloud.name}: only {len(keep)} usable points, at least {min_points} needed")
     if len(keep) == len(pts):
-        return _verified(Cloud(pts, cloud.normals, None, cloud.name, warnings))
+        return _verified(Cloud(pts, cloud.normals, None, cloud.name, warnings, cloud.sensors, cloud.sensor_of))
     normals = None if cloud.normals is None else cloud.normals[keep]
-    return _verified(Cloud(pts[keep], normals, None, cloud.name, warnings))
+    return _verified(Cloud(pts[keep], normals, None, cloud.name, warnings, cloud.sensors,
+                           None if cloud.sensor_of is None else cloud.sensor_of[keep]))
 
 
 def _within(values: np.ndarray, limit: float) -> np.ndarray:

@@ -687,6 +687,9 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
               or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
+    for c in rivals:
+        c["rival"] = True
+    ties = []
     symmetries = surface.symmetries()
     if status == OK and symmetries:
         reasons.append("the model is symmetric: " + "; ".join(symmetries) + " (in the model's frame): no scan can tell "
@@ -696,6 +699,7 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"{len(other_side)} pose(s) put about as many scan points on the model seen from the other side "
                        f"of it (the closest {other_side[0]['rotation_from_best_deg']:.1f} deg away): which side of the "
                        "part the scan shows cannot be told without the scanner's position (give it as viewpoint)")
+        ties.append(reasons[-1])
     rivals = [c for c in rivals if not c["from_the_other_side"]]
     if status == OK and rivals:
         r = min(rivals, key=lambda c: c["standard_errors_below_best"])
@@ -704,6 +708,7 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
                        f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm): the part may be nearly symmetric; see "
                        "candidates")
+        ties.append(reasons[-1])
     if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
         reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
                        f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
@@ -734,7 +739,7 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
         gate_mm=float(gate), n_inliers=int(round(fitness * len(scan))), iterations=int(best.iterations),
         time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, noise_mm=float(noise),
-        viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), **result)
+        viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), ties=ties, **result)
 
 
 def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:

@@ -1,4 +1,7 @@
-"""Read scans and models (PLY, PCD, XYZ-like text, STL, OBJ, OFF) into a checked ``Cloud`` in mm.
+"""Read scans and models (PLY, PCD, E57, XYZ-like text, STL, OBJ, OFF) into a checked ``Cloud`` in mm.
+
+Where a scan file says where its scanner stood (PCD ``VIEWPOINT``, the pose of each E57 scan, a PLY
+``comment viewpoint X Y Z`` line), the Cloud keeps it as ``sensors``.
 
 A silently misread file would place the workpiece wrongly, so every problem with a file becomes an
 ``InputError`` that names the file and says what is wrong.  Point data is parsed with numpy in bulk;
@@ -17,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .errors import InputError
-from .files import read_bytes
+from .files import checked_input, read_bytes
 from .geometry import Cloud, checked
 from .units import extent_warnings, mm_per_unit
 
@@ -36,6 +39,8 @@ class _Parsed(NamedTuple):
     triangles: np.ndarray | None = None
     units: str | None = None  # the unit the file declares itself (PLY ``comment units``)
     warnings: tuple[str, ...] = ()
+    sensors: np.ndarray | None = None  # scanner positions the file states (k x 3, the file's unit)
+    sensor_of: np.ndarray | None = None  # which of them saw each point
 
 
 def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit",
@@ -55,15 +60,14 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_opt
                          f"WorkCal reads {', '.join(_PARSERS)}")
     scale = None if units is None else mm_per_unit(units)  # a bad unit is refused before reading
     label = str(path)
-    parsed = _thinned_ply(path, label, max_points) if max_points and parse is _parse_ply else None
-    if parsed is None:
-        data = read_bytes(path)
-        try:
-            parsed = parse(data, label)
-        except (ValueError, IndexError, struct.error, OverflowError) as exc:
-            # Parsers report every problem they know of; this keeps an unforeseen one an InputError.
-            raise InputError(f"{label}: cannot be read as a {path.suffix.lower()} file ({exc})") from None
-        del data
+    if parse is _read_e57:  # pye57 reads the file itself; E57 coordinates are metres by the standard
+        checked_input(path)
+        parsed, units = _read_e57(path, label), "m"
+        scale = mm_per_unit(units)
+    else:
+        parsed = _thinned_ply(path, label, max_points) if max_points and parse is _parse_ply else None
+        if parsed is None:
+            parsed = _parsed(parse, read_bytes(path), label)
     if scale is None:
         units = parsed.units or "mm"
         try:
@@ -72,10 +76,20 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_opt
             raise InputError(f"{label}: the file declares {exc}") from None
     with np.errstate(over="ignore"):  # a value too large in mm becomes inf: refused or dropped by checked
         points = parsed.points * scale
-    cloud = checked(Cloud(points, parsed.normals, parsed.triangles, path.name, list(parsed.warnings)))
+    sensors = None if parsed.sensors is None else parsed.sensors * scale
+    cloud = checked(Cloud(points, parsed.normals, parsed.triangles, path.name, list(parsed.warnings), sensors,
+                          parsed.sensor_of))
     cloud.name = name or path.name
     cloud.warnings += extent_warnings(cloud.points, path.name, units, unit_option)
     return cloud
+
+
+def _parsed(parse, data: bytes, label: str) -> _Parsed:
+    try:
+        return parse(data, label)
+    except (ValueError, IndexError, struct.error, OverflowError) as exc:
+        # Parsers report every problem they know of; this keeps an unforeseen one an InputError.
+        raise InputError(f"{label}: cannot be read as a {label.rsplit('.', 1)[-1]} file ({exc})") from None
 
 
 # --- shared steps ------------------------------------------------------------------------------
@@ -251,6 +265,7 @@ class _PlyHeader(NamedTuple):
     elements: list
     units: str | None
     body_start: int
+    viewpoint: np.ndarray | None = None  # ``comment viewpoint X Y Z``: the scanner's position
 
 
 def _parse_ply(data: bytes, label: str) -> _Parsed:
@@ -283,7 +298,8 @@ def _parse_ply(data: bytes, label: str) -> _Parsed:
     if face_list and face.count:
         corners, lengths = values["face"][face_list.name]
         triangles = _fan_triangles(_integer_indices(corners, label), lengths, label, warnings)
-    return _Parsed(points, normals, triangles, header.units, tuple(warnings))
+    return _Parsed(points, normals, triangles, header.units, tuple(warnings),
+                   None if header.viewpoint is None else header.viewpoint[None])
 
 
 def _ply_header(data: bytes, label: str) -> _PlyHeader:
@@ -292,12 +308,14 @@ def _ply_header(data: bytes, label: str) -> _PlyHeader:
     end = re.search(rb"^end_header[ \t]*(?:\r?\n|\Z)", data[:_MAX_HEADER_BYTES], re.M)
     if end is None:
         raise InputError(f"{label}: the PLY header has no end_header line")
-    byte_order, units, elements, have_format = None, None, [], False
+    byte_order, units, elements, have_format, viewpoint = None, None, [], False, None
     for number, line in enumerate(data[:end.start()].decode("latin-1").splitlines()[1:], 2):
         words = line.split()
         if not words or words[0] in ("comment", "obj_info"):
             if words[:2] == ["comment", "units"] and len(words) == 3:
                 units = words[2]
+            if words[:2] == ["comment", "viewpoint"]:
+                viewpoint = _viewpoint(words[2:], 3, f"{label}: PLY header line {number}: comment viewpoint")
             continue
         if words[0] == "format" and len(words) == 3 and words[1] in _PLY_BYTE_ORDERS:
             byte_order, have_format = _PLY_BYTE_ORDERS[words[1]], True
@@ -316,7 +334,7 @@ def _ply_header(data: bytes, label: str) -> _PlyHeader:
         names = [p.name for p in element.properties]
         if len(set(names)) < len(names):
             raise InputError(f"{label}: the PLY element {element.name!r} repeats a property name")
-    return _PlyHeader(byte_order, elements, units, end.end())
+    return _PlyHeader(byte_order, elements, units, end.end(), viewpoint)
 
 
 def _ply_property(words: list[str], number: int, line: str, label: str) -> _PlyProperty:
@@ -607,7 +625,7 @@ _PCD_ENCODINGS = ("ascii", "binary", "binary_compressed")
 
 
 def _parse_pcd(data: bytes, label: str) -> _Parsed:
-    fields, count, encoding, start = _pcd_header(data, label)
+    fields, count, encoding, start, viewpoint = _pcd_header(data, label)
     if encoding == "ascii":
         width = sum(size for _, _, size in fields)
         tokens = data[start:].split()
@@ -635,11 +653,13 @@ def _parse_pcd(data: bytes, label: str) -> _Parsed:
                 offset += count * size * int(code[1])
     single = {name: values[:, 0] if values.shape[1] == 1 else values for name, values in columns.items()}
     points, normals = _points_and_normals(single, "xyz", ("normal_x", "normal_y", "normal_z"), label, "points")
-    return _Parsed(points, normals)
+    return _Parsed(points, normals, sensors=viewpoint)
 
 
 def _pcd_header(data: bytes, label: str):
-    """([(field name, numpy code, values per point)], points, encoding, offset of the data)."""
+    """([(field name, numpy code, values per point)], points, encoding, offset of the data, the scanner's
+    position as a 1 x 3 array or None).  ``VIEWPOINT tx ty tz qw qx qy qz`` gives the position; PCL writes
+    ``0 0 0 1 0 0 0`` whether or not the scanner stood there, so that one says nothing."""
     entries, pos = {}, 0
     while "DATA" not in entries:
         newline = data.find(b"\n", pos)
@@ -673,7 +693,67 @@ def _pcd_header(data: bytes, label: str):
                          f"{grid[1]} = {grid[0] * grid[1]}")
     if points < 0 or any(count < 1 for _, _, count in fields):
         raise InputError(f"{label}: the PCD header declares a negative POINTS or a COUNT below 1")
-    return fields, points, encoding, pos
+    viewpoint = None
+    if "VIEWPOINT" in entries:
+        pose = _viewpoint(entries["VIEWPOINT"], 7, f"{label}: the PCD VIEWPOINT")
+        if not np.array_equal(pose, [0, 0, 0, 1, 0, 0, 0]):
+            viewpoint = pose[None, :3]
+    return fields, points, encoding, pos, viewpoint
+
+
+def _viewpoint(words: list, count: int, what: str) -> np.ndarray:
+    """``count`` finite numbers from header words, or an error naming ``what``."""
+    try:
+        values = np.array([float(word) for word in words])
+    except ValueError:
+        values = np.zeros(0)
+    if len(values) != count or not np.isfinite(values).all():
+        raise InputError(f"{what} must be {count} finite numbers, found {' '.join(words)[:80]!r}")
+    return values
+
+
+# --- E57 ----------------------------------------------------------------------------------------
+
+def _read_e57(path: Path, label: str) -> _Parsed:
+    """Every scan of an E57 file in the file's common frame, each moved by its stored pose, with each
+    scan's scanner position (the pose's translation) kept for the free-space test.  Points a scan marks
+    invalid are dropped; each scan's point count is checked against its header."""
+    try:
+        import pye57
+    except ImportError:
+        from .errors import MissingDependency
+
+        raise MissingDependency(f"{label}: E57 files are read with the Python package pye57, which is not installed; "
+                                "install it with: python3 -m pip install pye57 (in FreeCAD: the Addon Manager "
+                                "installs it with WorkCal, or see the README)") from None
+    from .frames import from_quaternion_wxyz
+
+    try:
+        e57 = pye57.E57(str(path))
+    except Exception as exc:  # libE57Format reports a broken file as its own exception types
+        raise InputError(f"{label}: cannot be read as an E57 file ({exc})") from None
+    points, sensors, sensor_of = [], [], []
+    for index in range(e57.scan_count):
+        try:
+            header = e57.get_header(index)
+            data = e57.read_scan_raw(index)
+        except Exception as exc:
+            raise InputError(f"{label}: scan {index} cannot be read ({exc})") from None
+        if not all(f"cartesian{axis}" in data for axis in "XYZ"):
+            raise InputError(f"{label}: scan {index} has no cartesian coordinates (cartesianX, Y, Z); WorkCal reads "
+                             "E57 scans stored as x, y, z")
+        xyz = np.column_stack([np.asarray(data[f"cartesian{axis}"], dtype=float) for axis in "XYZ"])
+        if len(xyz) != header.point_count:
+            raise _truncated(label, header.point_count, f"points in scan {index}", len(xyz))
+        if "cartesianInvalidState" in data:
+            xyz = xyz[np.asarray(data["cartesianInvalidState"]) == 0]
+        pose = from_quaternion_wxyz(np.asarray(header.rotation, dtype=float), np.asarray(header.translation, float))
+        points.append(xyz @ pose[:3, :3].T + pose[:3, 3])
+        sensors.append(pose[:3, 3])
+        sensor_of.append(np.full(len(xyz), index, dtype=np.int64))
+    if not points:
+        raise InputError(f"{label}: the E57 file holds no scans")
+    return _Parsed(np.vstack(points), sensors=np.array(sensors), sensor_of=np.concatenate(sensor_of))
 
 
 def _pcd_decompressed(data: bytes, start: int, expected: int, label: str) -> bytes:
@@ -738,8 +818,6 @@ def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
     measurement with its normal), the voxel grown by sqrt(2) whenever more than max_points / 2 are
     kept, so memory stays bounded whatever the file holds.  None for any other file (read whole as
     usual).  The counts are checked both ways as for any PLY."""
-    from .files import checked_input
-
     checked_input(path)
     with open(path, "rb") as fh:
         header = _ply_header(fh.read(_MAX_HEADER_BYTES), label)
@@ -787,7 +865,7 @@ def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
     if dropped:
         warnings.append(f"{label}: ignored {dropped} points with NaN or infinite coordinates")
     return _Parsed(values[:, :3], values[:, 3:] if values.shape[1] == 6 else None, None, header.units,
-                   tuple(warnings))
+                   tuple(warnings), None if header.viewpoint is None else header.viewpoint[None])
 
 
 class _ThinningGrid:
@@ -1045,6 +1123,6 @@ def _off_faces(face_lines: list[tuple[int, str]], label: str):
     return np.array(corners, dtype=np.int64), np.array(lengths, dtype=np.int64)
 
 
-_PARSERS = {".ply": _parse_ply, ".pcd": _parse_pcd, ".xyz": _parse_text_cloud, ".asc": _parse_text_cloud,
+_PARSERS = {".ply": _parse_ply, ".pcd": _parse_pcd, ".e57": _read_e57, ".xyz": _parse_text_cloud, ".asc": _parse_text_cloud,
             ".pts": _parse_text_cloud, ".csv": _parse_text_cloud, ".txt": _parse_text_cloud,
             ".stl": _parse_stl, ".obj": _parse_obj, ".off": _parse_off}

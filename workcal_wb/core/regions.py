@@ -17,13 +17,21 @@ from scipy.spatial import cKDTree
 from . import frames, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
-from .match import match
-from .result import FAILED, MatchResult
+from .match import MatchOptions, match
+from .result import AMBIGUOUS, FAILED, OK, MatchResult
 from .surface import SurfaceModel
 
-# The platform must hold at least this fraction of the scan to count as one.
-MIN_PLATFORM_FRACTION = 0.15
-PLANE_RANSAC_TRIALS = 300
+# The platform must hold at least this fraction of the scan to count as one (a dark table returns few
+# points); and, when its up side comes from the data (_up_side), at least SUPPORTED_SHARE of the points
+# off it must lie over it, UP_SIDE_SHARE of those over its hull less the margin on one side.
+MIN_PLATFORM_FRACTION = 0.05
+SUPPORTED_SHARE, UP_SIDE_SHARE, ALL_ON_ONE_SIDE = 0.5, 0.8, 0.9
+# The largest planes tried in turn (most points first) until one is the platform.
+PLATFORM_CANDIDATES = 5
+HULL_MARGIN_MM, HULL_MARGIN_SPACINGS = 5.0, 10.0
+# A given up direction picks the largest plane within this angle of square to it.
+MAX_UP_DEG = 30.0
+PLANE_RANSAC_TRIALS = 2000
 PLANE_SAMPLE_POINTS = 5000
 # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
 PLATFORM_BAND_MM = 1.0
@@ -46,6 +54,11 @@ MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
 SEARCH_ATTEMPTS = 3
 GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
+# Where the reference touches something, its region keeps only points this close to its surface: this
+# many times the scan's noise, and at least MIN_ON_SURFACE_MM.
+ON_SURFACE_NOISES, MIN_ON_SURFACE_MM = 5.0, 0.5
+# A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
+MIN_FITNESS_OF_CLUSTER = 0.05
 
 
 @dataclass
@@ -58,22 +71,27 @@ class Located:
     workpiece_match: MatchResult
     reference_match: MatchResult
     warnings: list
+    plane: "Platform | None" = None
 
     def as_dict(self) -> dict:
         return {"workpiece": self.workpiece, "reference": self.reference, "platform": self.platform,
                 "source": "auto", "warnings": list(self.warnings)}
 
 
-def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0) -> dict:
+def find_regions(scan: Cloud, workpiece, reference, tolerance_mm: float = 0.3, seed: int = 0, up=None,
+                 viewpoint=None) -> dict:
     """The workpiece, reference and platform regions of ``scan`` as index arrays (see ``locate``)."""
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, seed) for m in (workpiece, reference)]
-    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed).as_dict()
+    return locate(scan, *surfaces, tolerance_mm=tolerance_mm, seed=seed, up=up, viewpoint=viewpoint).as_dict()
 
 
 def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float = 0.3,
-           seed: int = 0, progress=None) -> Located:
+           seed: int = 0, progress=None, up=None, viewpoint=None) -> Located:
     """Find the reference and the workpiece in a scene scan; NotFound names what could not be found
-    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise)."""
+    and, where it can tell, why (a model the wrong size for every object, a tolerance below the noise).
+
+    The scan may be in any frame: ``up`` (a direction) and ``viewpoint`` (the scanner's position),
+    when known, say which side of the platform the objects stand on; otherwise the data do."""
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
@@ -85,38 +103,84 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     rng = np.random.default_rng(seed)
     spacing = pointops.median_spacing(points[valid], seed=seed)
     warnings = []
-    platform = _platform(points[valid], spacing, rng)
+    platform = find_platform(points[valid], spacing, rng, up, viewpoint)
     if platform is None:
         warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
-                        "points); every point is treated as an object")
+                        "points with the objects standing on one side of it); every point is treated as an object")
         platform_idx, objects = np.empty(0, dtype=np.int64), valid
     else:
-        platform_idx, objects = valid[platform], valid[~platform]
-    labels = _clusters(points[objects], LINK_SPACINGS * spacing)
+        platform_idx, objects = valid[platform.below], valid[~platform.below]
     report = progress or (lambda fraction, message: None)
+    surfaces = {"reference": reference, "workpiece": workpiece}
+    near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
+    context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm,
+                   tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
+                                                           min_fitness=MIN_FITNESS_OF_CLUSTER,
+                                                           viewpoint=None if viewpoint is None else tuple(viewpoint)))
+    try:
+        found = _in_turn(objects, ("reference", "workpiece"), report, **context)
+    except NotFound as exc:
+        found = exc
+    # A reference not found, or not for sure, where objects may touch: the workpiece first, then the
+    # reference in what is left of its cluster.
+    if isinstance(found, NotFound) or found["reference"][0].status != OK:
+        try:
+            other = _in_turn(objects, ("workpiece", "reference"), report, **context)
+        except NotFound:
+            other = None
+        if other is not None and (isinstance(found, NotFound) or _rank(other) > _rank(found)):
+            found = other
+    if isinstance(found, NotFound):
+        raise found
+    (workpiece_match, workpiece_idx, wp_touching), (reference_match, reference_idx, ref_touching) = (
+        found["workpiece"], found["reference"])
+    if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
+        reference_idx = reference_idx[_nearer(points[reference_idx], (reference, reference_match.matrix),
+                                              (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
+        # The reference is rigid and unchanged: clay pressed against it lies off its surface.
+        within = max(MIN_ON_SURFACE_MM, ON_SURFACE_NOISES * reference_match.noise_mm)
+        reference_idx = reference_idx[_on_surface(points[reference_idx], reference, reference_match.matrix, within)]
+        workpiece_idx = workpiece_idx[_nearer(points[workpiece_idx], (workpiece, workpiece_match.matrix),
+                                              (reference, reference_match.matrix), near_mm["reference"])]
+        warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
+                        f"scan was split between the placed models; each region is only the points nearer its model")
+    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform)
 
-    report(0.1, f"looking for the reference {reference.name}")
-    options = dict(tolerance_mm=tolerance_mm, seed=seed, min_fitness=0.3)
-    reference_match, rejected = _first_match(scan, points, objects, labels, reference, options, "reference")
-    if reference_match is None:
-        raise NotFound(f"reference object {reference.name}: not found in {scan.name}: "
-                       + _why_not_found(points, objects, labels, reference, rejected, tolerance_mm, "reference"))
-    on_reference = _on_model(points[objects], labels, reference, reference_match.matrix, max(2.0, 3 * spacing))
-    if on_reference.touching:
-        warnings.append(f"{scan.name}: the reference touches another object; its region is only the points "
-                        "near its model")
-    reference_idx = objects[on_reference.region]
 
-    report(0.3, f"looking for the workpiece {workpiece.name}")
-    rest, rest_labels = objects[~on_reference.region], labels[~on_reference.region]
-    workpiece_match, rejected = _first_match(scan, points, rest, rest_labels, workpiece, options, "workpiece")
-    if workpiece_match is None:
-        raise NotFound(f"workpiece {workpiece.name}: not found in {scan.name}: "
-                       + _why_not_found(points, rest, rest_labels, workpiece, rejected, tolerance_mm, "workpiece"))
-    # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
-    on_workpiece = _on_model(points[rest], rest_labels, workpiece, workpiece_match.matrix, max(3.0, 5 * spacing))
-    workpiece_idx = rest[on_workpiece.clusters]
-    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings)
+def _rank(found: dict) -> int:
+    return sum(match.status == OK for match, _, _ in found.values())
+
+
+def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, tolerance_mm, options) -> dict:
+    """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
+    ones before left: a cluster the model explains only in part is split (see _on_model)."""
+    found, left = {}, objects
+    for step, role in enumerate(order):
+        surface = surfaces[role]
+        report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
+        labels = _clusters(points[left], LINK_SPACINGS * spacing)
+        result, rejected = _first_match(scan, points, left, labels, surface, options, role, near_mm[role])
+        if result is None:
+            what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
+            raise NotFound(f"{what}: not found in {scan.name}: "
+                           + _why_not_found(points, left, labels, surface, rejected, tolerance_mm, role))
+        on = _on_model(points[left], labels, surface, result.matrix, near_mm[role])
+        # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
+        region = on.clusters if role == "workpiece" and not on.touching else on.region
+        found[role] = (result, left[region], on.touching)
+        left = left[~region]
+    return found
+
+
+def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict) -> MatchResult:
+    """The match on a final region, started from the pose found while locating it; its candidates
+    and ambiguity come from the global search that found it."""
+    again = match(cloud, surface, init=found.matrix, **options)
+    if again.status == OK and found.status == AMBIGUOUS:
+        again.status, again.reasons, again.candidates, again.ties = AMBIGUOUS, found.reasons, found.candidates, found.ties
+    again.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **again.timings_s}
+    again.time_s += found.time_s
+    return again
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str) -> MatchResult:
@@ -133,32 +197,106 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str)
     return best
 
 
-def _platform(points: np.ndarray, spacing: float, rng: np.random.Generator) -> np.ndarray | None:
-    """Mask of the points on or below the largest plane, if it is large enough to be the platform.
+@dataclass
+class Platform:
+    """The plane the objects stand on: a point on it, its unit normal pointing up (to the side the
+    objects stand on), the mask of the points on or below it, and how "up" was told."""
 
-    "Below" is the side away from the scanner (the origin of S): nothing seen there can be an
-    object standing on the platform."""
+    centre: np.ndarray
+    up: np.ndarray
+    below: np.ndarray
+    band: float
+    source: str
+
+    def height(self, points: np.ndarray) -> np.ndarray:
+        return (points - self.centre) @ self.up
+
+
+def find_platform(points: np.ndarray, spacing: float, rng: np.random.Generator, up=None,
+                  viewpoint=None) -> Platform | None:
+    """The largest plane the objects stand on, if there is one (see ``_up_side``), in any frame.
+
+    ``up`` (a direction the user gives) picks the largest plane square to it within MAX_UP_DEG;
+    otherwise the plane holding the most points.  Which side is up: ``up``, else the side the
+    ``viewpoint`` (the scanner's position, given or read from the file) is on, else the side the
+    objects stand on (_up_side)."""
     sample = points[rng.choice(len(points), min(len(points), PLANE_SAMPLE_POINTS), replace=False)]
     band = PLATFORM_BAND_MM + 2 * spacing
     triples = sample[rng.integers(0, len(sample), (PLANE_RANSAC_TRIALS, 3))]
     normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
     length = np.linalg.norm(normals, axis=1)
     keep = length > 1e-9
-    if not keep.any():  # every sampled triple is collinear: there is no plane at all
+    if up is not None:
+        up = np.asarray(up, dtype=float) / np.linalg.norm(up)
+        keep &= np.abs(normals @ up) > np.cos(np.radians(MAX_UP_DEG)) * np.maximum(length, 1e-12)
+    if not keep.any():  # every sampled triple is collinear (or none is square to ``up``): no plane at all
         return None
     normals, triples = normals[keep] / length[keep, None], triples[keep]
     offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
-    counts = (np.abs(sample @ normals.T - offsets) < band).sum(axis=0)
-    best = int(np.argmax(counts))
-    if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
-        return None
-    inliers = sample[np.abs(sample @ normals[best] - offsets[best]) < band]
+    near = np.abs(sample @ normals.T - offsets) < band  # (sample, plane)
+    remaining = np.ones(len(sample), dtype=bool)
+    for _ in range(PLATFORM_CANDIDATES):  # the largest plane, then the largest of the points left, ...
+        counts = near[remaining].sum(axis=0)
+        best = int(np.argmax(counts))
+        if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
+            return None
+        platform = _platform_on(points, sample[near[:, best]], band, spacing, up, viewpoint)
+        if platform is not None:
+            return platform
+        remaining &= ~near[:, best]
+    return None
+
+
+def _platform_on(points, inliers, band: float, spacing: float, up, viewpoint) -> Platform | None:
+    """The platform on the plane fitted to ``inliers``, up where ``up``, the ``viewpoint`` or the
+    objects say (see find_platform); None when the plane carries no objects."""
     centre = inliers.mean(axis=0)
     normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]
-    if normal @ (-centre) < 0:  # make the normal point towards the scanner
-        normal = -normal
+    if up is not None:
+        side, source = float(np.sign(normal @ up)), "the given up direction"
+    elif viewpoint is not None:
+        side, source = float(np.sign(normal @ (np.asarray(viewpoint, float) - centre))), "the scanner's position"
+    else:
+        side, source = _up_side(points, inliers, centre, normal, band, spacing), "the objects standing on it"
+        if side == 0:
+            return None
+    normal = side * normal
     height = (points - centre) @ normal
-    return height < band
+    return Platform(centre, normal, height < band, band, source)
+
+
+def _up_side(points, inliers, centre, normal, band: float, spacing: float) -> float:
+    """+1 or -1: the side of the plane the objects stand on, or 0 when the plane carries none.
+
+    Off the plane, over the plane's own footprint (the convex hull of its points, less a margin, so
+    that the platform's side faces do not count), are the objects standing on it: seen from the
+    scanner's side, the plane hides whatever lies under it.  The plane is a platform only when those
+    points lie on one side (at least UP_SIDE_SHARE of them, and ALL_ON_ONE_SIDE of all the points off
+    it) and it holds up most of the objects (at least SUPPORTED_SHARE of the points off the plane lie
+    over its hull): the face of an object holds up nothing but itself, and other objects stand below it."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    axes = np.vstack([u, np.cross(normal, u)])
+    try:
+        hull = ConvexHull((inliers - centre) @ axes.T)
+    except QhullError:
+        return 0.0
+    height = (points - centre) @ normal
+    off = np.abs(height) > band
+    flat = (points[off] - centre) @ axes.T
+    reach = flat @ hull.equations[:, :2].T + hull.equations[:, 2]  # <= 0 inside each edge
+    over = reach.max(axis=1) <= 0
+    inside = reach.max(axis=1) <= -max(HULL_MARGIN_MM, HULL_MARGIN_SPACINGS * spacing)
+    above = int(np.count_nonzero(height[off][inside] > 0))
+    below = int(np.count_nonzero(inside)) - above
+    side = 1.0 if above > below else -1.0
+    if max(above, below) < MIN_CLUSTER_POINTS or over.mean() < SUPPORTED_SHARE:
+        return 0.0
+    if max(above, below) < UP_SIDE_SHARE * (above + below) or np.mean(side * height[off] > 0) < ALL_ON_ONE_SIDE:
+        return 0.0
+    return side
 
 
 def _clusters(points: np.ndarray, link: float) -> np.ndarray:
@@ -178,28 +316,39 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
 
 
 def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
-    """Clusters that could be the model by size, most alike first."""
+    """Clusters that could hold the model: those of its size, most alike first, then the larger ones
+    (objects that touch, or clay joining them, make one cluster), smallest first."""
     if len(idx) == 0:
         return []
-    out = []
+    alike, larger = [], []
     for label in np.unique(labels):
         members = idx[labels == label]
         if len(members) < MIN_CLUSTER_POINTS:
             continue
         ratio = Cloud(points[members]).diagonal() / surface.diagonal
         if SIZE_RATIO_RANGE[0] <= ratio <= SIZE_RATIO_RANGE[1]:
-            out.append((abs(np.log(ratio)), -len(members), members))
-    return [members for *_, members in sorted(out, key=lambda item: item[:2])]
+            alike.append((abs(np.log(ratio)), -len(members), members))
+        elif ratio > SIZE_RATIO_RANGE[1]:
+            larger.append((ratio, -len(members), members))
+    return [members for *_, members in sorted(alike, key=lambda item: item[:2]) + sorted(larger, key=lambda i: i[:2])]
 
 
-def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str):
+def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float):
     """Match the model against its candidate clusters in turn; the first trustworthy match wins.
 
-    Returns (the match or None, the best match rejected for its share of points within the tolerance
-    or None): a rejected match that explains its cluster says the tolerance is below the noise."""
+    A cluster the placed model explains only in part (it holds more: objects touching) is split: the
+    match is judged again on the points near the placed model alone.  Returns (the match or None, the
+    best match rejected for its share of points within the tolerance or None): a rejected match that
+    explains its cluster says the tolerance is below the noise."""
     fallback, rejected = None, None
     for members in _candidates(points, idx, labels, surface):
         result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
+        if result.matrix is not None and result.fitness < MIN_FITNESS[role]:
+            near = _near(points[members], surface, result.matrix, near_mm)
+            if near.sum() < MIN_CLUSTER_POINTS:
+                continue
+            result = refit(Cloud(points[members[near]], name=f"{role} part of a candidate in {scan.name}"), surface,
+                           result, {**options, "min_fitness": MatchOptions.min_fitness})
         noisy = result.noise_mm > result.tolerance_mm  # failed only because the tolerance is below the noise
         if (result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]
                 or noisy):
@@ -243,13 +392,31 @@ class _OnModel:
 
 
 def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> _OnModel:
-    """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful)."""
+    """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful);
+    where its cluster holds more than the model explains (objects touching), only the points near it."""
     near = _near(points, surface, U, distance)
     counts = np.bincount(labels, minlength=labels.max() + 1)
-    share = np.bincount(labels, weights=near, minlength=len(counts)) / np.maximum(counts, 1)
+    on = np.bincount(labels, weights=near, minlength=len(counts))
+    share = on / np.maximum(counts, 1)
     clusters = share[labels] >= CLUSTER_SHARE
-    touching = clusters.any() and near[clusters].mean() < TOUCHING_SHARE
-    return _OnModel(clusters, clusters & near if touching else clusters, bool(touching))
+    held = on[labels] >= MIN_CLUSTER_POINTS  # clusters the model explains a real part of
+    touching = bool((held & (share[labels] < TOUCHING_SHARE)).any())
+    return _OnModel(clusters, held & near if touching else clusters, touching)
+
+
+def _nearer(points: np.ndarray, own, other, distance: float) -> np.ndarray:
+    """Which points lie nearer to the ``own`` placed model than to the ``other`` ((SurfaceModel, U) each);
+    points beyond ``distance`` of the other count as nearer to their own."""
+    d_own = own[0].nearest(frames.apply(frames.invert(own[1]), points), np.inf)[0]
+    d_other = other[0].nearest(frames.apply(frames.invert(other[1]), points), distance)[0]
+    return d_own < d_other
+
+
+def _on_surface(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, within: float) -> np.ndarray:
+    """Which points lie within ``within`` mm of the placed model's surface (point to plane)."""
+    moved = frames.apply(frames.invert(U), points)
+    _, idx, found = surface.nearest(moved, 2 * within + 2 * surface.spacing)
+    return found & (np.abs(surface.plane_residuals(moved, idx)) <= within)
 
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:

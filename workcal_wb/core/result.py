@@ -142,6 +142,8 @@ class MatchResult:
     viewpoint: dict = field(default_factory=dict)  # the sensor position the view was judged from, and its source
     view: dict = field(default_factory=dict)  # the best pose's view evidence: cells, hidden points, missing cells
     symmetries: list = field(default_factory=list)  # the model's own: axis, point_mm, order (0: any angle), description
+    ties: list = field(default_factory=list)  # the reasons that come from rival poses (physics.decide may break them)
+    constraints: list = field(default_factory=list)  # poses ruled out by contact with the platform or free space
 
     def __post_init__(self):
         if self.status not in STATUSES:
@@ -165,7 +167,7 @@ class MatchResult:
         values = _checked_fields(cls, data, source)
         for name in ("percentiles_mm", "timings_s"):
             _check_numbers(values.get(name, {}), source, name)
-        for name in ("warnings", "reasons"):
+        for name in ("warnings", "reasons", "ties", "constraints"):
             _check_items(values.get(name, []), _TEXT, source, name)
         _check_items(values.get("candidates", []), (dict,), source, "candidates")
         try:
@@ -185,6 +187,7 @@ class MatchResult:
                          f"fitness {self.fitness:.1%}, coverage {self.coverage:.1%}, "
                          f"{self.within_tolerance_pct:.1f}% within {self.tolerance_mm} mm, scan noise {self.noise_mm:.3f} mm")
         lines += [f"  symmetry: {s['description']}" for s in self.symmetries]
+        lines += [f"  decided: {c}" for c in self.constraints]
         lines += [f"  reason: {r}" for r in self.reasons] + [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -239,6 +242,7 @@ class CalibrationResult:
                              f"{m.mean_directed_hausdorff_mm:.3f} mm, {m.within_tolerance_pct:.1f}% within "
                              f"{m.tolerance_mm} mm, {m.n_inliers} points")
                 lines += [f"  {role} model symmetry: {s['description']}" for s in m.symmetries]
+                lines += [f"  {role}: {c}" for c in m.constraints]
         for key, words in (("toolpath_bound_mm", "at the toolpath"), ("surface_bound_mm", "at the workpiece surface")):
             if key in self.uncertainty:
                 lines.append(f"  uncertainty {words}: {self.uncertainty[key]:.4f} mm "

@@ -156,14 +156,18 @@ def toolpath_points(obj) -> np.ndarray:
     return points
 
 
-def options_from(tolerance_mm=None, method=None, seed=None, resamples=None) -> CalibrationOptions:
+def options_from(tolerance_mm=None, method=None, seed=None, resamples=None, scanner_origin=None,
+                 up=None) -> CalibrationOptions:
     """CalibrationOptions with the preferences filling what is not given; bad values are InputErrors
-    (CalibrationOptions checks them)."""
+    (CalibrationOptions checks them).  ``scanner_origin`` (mm) and ``up``, in the scan's coordinates,
+    are the document's to give when the scan's file does not tell them (None: from the data)."""
     tolerance_mm = prefs.get("ToleranceMm") if tolerance_mm is None else float(tolerance_mm)
     method = prefs.get("Method") if method is None else str(method)
     seed = prefs.get("Seed") if seed is None else int(seed)
     resamples = prefs.get("Resamples") if resamples is None else int(resamples)
-    return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples)
+    return CalibrationOptions(tolerance_mm=tolerance_mm, method=method, seed=seed, resamples=resamples,
+                              scanner_origin=None if scanner_origin is None else tuple(scanner_origin),
+                              up=None if up is None else tuple(up))
 
 
 def gather_inputs(scan, workpiece, reference, *, options: CalibrationOptions | None = None,
@@ -217,6 +221,11 @@ OPTION_PROPERTIES = [
                                                        "Picked: use the regions picked on the scan"),
     ("App::PropertyInteger", "Seed", "Options", "Random seed of the global search and the bootstrap"),
     ("App::PropertyInteger", "Resamples", "Options", "Bootstrap refits for the uncertainty"),
+    ("App::PropertyBool", "ScannerOriginGiven", "Options", "Use ScannerOrigin as where the scanner stood (else the "
+                                                           "scan file's, or estimated)"),
+    ("App::PropertyVectorDistance", "ScannerOrigin", "Options", "Where the scanner stood, in the scan's coordinates"),
+    ("App::PropertyVector", "Up", "Options", "The platform's up direction in the scan's coordinates (0, 0, 0: from "
+                                             "the data)"),
     ("App::PropertyBool", "ShowFrames", "Display", "Show triads of the frames B, S and X"),
     ("App::PropertyLength", "FrameSize", "Display", "Length of the triad axes (0: from the workpiece size)"),
 ]
@@ -268,7 +277,11 @@ def _add_properties(obj) -> None:
 
 
 def options_of(obj) -> CalibrationOptions:
-    return options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Resamples)
+    origin = getattr(obj, "ScannerOrigin", None) if getattr(obj, "ScannerOriginGiven", False) else None
+    up = getattr(obj, "Up", None)
+    return options_from(obj.Tolerance.Value, obj.Method, obj.Seed, obj.Resamples,
+                        scanner_origin=None if origin is None else (origin.x, origin.y, origin.z),
+                        up=None if up is None or up.Length == 0 else (up.x, up.y, up.z))
 
 
 def inputs_of(obj) -> Inputs:
@@ -453,18 +466,19 @@ class CalibrationFeature(Feature):
 # --------------------------------------------------------------------------------- create / update
 
 def make_calibration(doc, scan, workpiece, reference, *, tolerance_mm=None, method=None, seed=None,
-                     resamples=None, regions: str | None = None, toolpath=None,
+                     resamples=None, scanner_origin=None, up=None, regions: str | None = None, toolpath=None,
                      result: CalibrationResult | None = None, inputs: Inputs | None = None, progress=None,
                      name: str = "Calibration", placed_model: bool = False):
     """Calibrate and add the result object to ``doc`` in one undo step; return the object.
 
-    Options not given come from the preferences.  ``result`` (with the ``inputs`` it came from) is a
+    Options not given come from the preferences; ``scanner_origin`` and ``up`` (scan coordinates) are
+    stored on the object as document inputs.  ``result`` (with the ``inputs`` it came from) is a
     calibration computed elsewhere, e.g. in a worker thread; otherwise it is computed here, with
     ``progress`` as in core.calibrate.  Bad inputs raise InputError, cancelling raises Cancelled: in
     both cases the document is left as it was.  A calibration whose status is "failed" is still
     added (its reasons tell why; exporters refuse it unless forced)."""
     if inputs is None:
-        options = options_from(tolerance_mm, method, seed, resamples)
+        options = options_from(tolerance_mm, method, seed, resamples, scanner_origin, up)
         inputs = gather_inputs(scan, workpiece, reference, options=options,
                                regions=regions or prefs.get("Regions"), toolpath=toolpath)
     if result is None:
@@ -495,6 +509,9 @@ def _write_inputs(obj, scan, workpiece, reference, toolpath, inputs: Inputs, reg
     obj.Tolerance = o.tolerance_mm
     obj.Seed = o.seed
     obj.Resamples = o.resamples
+    obj.ScannerOriginGiven = o.scanner_origin is not None
+    obj.ScannerOrigin = FreeCAD.Vector(*(o.scanner_origin or (0.0, 0.0, 0.0)))
+    obj.Up = FreeCAD.Vector(*(o.up or (0.0, 0.0, 0.0)))
     obj.Regions = regions or ("Picked" if inputs.regions is not None else "Auto")
 
 

@@ -159,6 +159,14 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
         section, missed = _verdicts(shared, seed, quick, log)
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
         kept = previous.split(VERDICTS_HEADING)[0].rstrip("\n")
+        scenes = previous.split(SCENES_HEADING, 1)[1] if SCENES_HEADING in previous else ""
+        atomic_write_text(out, (kept + "\n\n" if kept else "") + section
+                          + ("\n" + SCENES_HEADING + scenes if scenes else ""))
+        return Report(section, missed)
+    if only == "scenes":
+        section, missed = _scenes(shared, seed, log)
+        previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
+        kept = previous.split(SCENES_HEADING)[0].rstrip("\n")
         atomic_write_text(out, (kept + "\n\n" if kept else "") + section)
         return Report(section, missed)
     rounds = 1 if quick else 2
@@ -190,6 +198,9 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
     report = _table(per_method, large, seed, quick, rounds, note, gcode)
     section, missed = _verdicts(shared, seed, quick, log)
     report = Report(report.text + "\n" + section, report.missed + missed)
+    if not quick:
+        section, missed = _scenes(shared, seed, log)
+        report = Report(report.text + "\n" + section, report.missed + missed)
     atomic_write_text(out, report.text)
     return report
 
@@ -209,6 +220,24 @@ def _verdicts(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, li
     section, _ = verdicts.table(rows, seed)
     wrong_ok, _ = verdicts.goals(rows)
     return section, [f"verdicts: {len(wrong_ok)} wrong pose(s) reported ok"] if wrong_ok else []
+
+
+SCENES_HEADING = "## Scenes"
+
+
+def _scenes(shared: Path | None, seed: int, log) -> tuple[str, list]:
+    """The scenes section (see scenes.py), computed in a child process, and the goals it missed."""
+    from . import scenes
+
+    log("benchmark: scenes ...")
+    rows = _in_child(_run_scenes, bunny_folder(shared), seed)
+    return scenes.table(rows, seed), scenes.goals(rows)
+
+
+def _run_scenes(bunny, seed: int, queue) -> None:
+    from .scenes import run as run_scenes
+
+    queue.put(run_scenes(bunny, seed, log=lambda message: None))
 
 
 def _run_verdicts(bunny, seed: int, views: int, queue) -> None:

@@ -140,11 +140,16 @@ class Scanner:
         position = target + distance_mm * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
         image_size = settings.pop("image_size", cls.image_size)
         pitch = settings.pop("pixel_pitch_mm", None)
-        if pitch is None:  # the pitch at which the outermost point lands on the image border, plus margin
-            seen = frames.apply(frames.invert(cls(position, target).frame()), points)
-            slope = np.abs(seen[:, :2] / seen[:, 2:]).max(axis=0) / (0.5 * np.array(image_size))
-            pitch = (1 + margin) * distance_mm * float(slope.max())
+        if pitch is None:
+            pitch = cls.fitting_pitch(position, target, points, image_size, margin)
         return cls(position, target, pixel_pitch_mm=pitch, image_size=image_size, **settings)
+
+    @classmethod
+    def fitting_pitch(cls, position, target, points: np.ndarray, image_size, margin: float = 0.1) -> float:
+        """The pitch at which the outermost of ``points`` (B) lands on the image border, plus margin."""
+        seen = frames.apply(frames.invert(cls(position, target).frame()), points)
+        slope = np.abs(seen[:, :2] / seen[:, 2:]).max(axis=0) / (0.5 * np.array(image_size))
+        return (1 + margin) * float(np.linalg.norm(np.asarray(target) - position)) * float(slope.max())
 
 
 def scan_part(mesh: Cloud, pose: np.ndarray, direction, distance_mm: float = 600.0, samples: int = 20000,
