@@ -5,7 +5,7 @@ BUILD         := $(CURDIR)/build
 FREECAD_HOME  := $(BUILD)/freecad-home
 DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
-                 python3-hypothesis python3-pip xvfb xauth libgl1-mesa-dri
+                 python3-hypothesis python3-pip python3-distributed xvfb xauth libgl1-mesa-dri
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
                  WORKCAL_REQUIRE_PYE57=1

@@ -39,10 +39,16 @@ def files(tmp_path_factory):
 
 def _same(a, b) -> bool:
     """Two match results equal in every field but their timings."""
-    a, b = a.to_dict(), b.to_dict()
-    for d in (a, b):
-        d.pop("time_s"), d.pop("timings_s")
-    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+    return json.dumps(_timeless(a.to_dict()), sort_keys=True) == json.dumps(_timeless(b.to_dict()), sort_keys=True)
+
+
+def _timeless(value):
+    """A result's JSON without its timings (at any depth), the one part that differs run to run."""
+    if isinstance(value, dict):
+        return {k: _timeless(v) for k, v in value.items() if k not in ("time_s", "timings_s")}
+    if isinstance(value, list):
+        return [_timeless(v) for v in value]
+    return value
 
 
 def _entries(folder: Path) -> list:
@@ -179,18 +185,48 @@ def test_the_folder_stays_bounded_least_recently_used_first(files, tmp_path):
     assert [p.exists() for p in paths] == [True, False, True]
 
 
-def test_match_command_cache_options(files, tmp_path, capsys):
+def test_the_default_folder_is_the_users_cache_folder(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert default_folder() == tmp_path / "xdg" / "workcal" / "models"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    if sys.platform != "win32":
+        assert default_folder() == tmp_path / "home" / ".cache" / "workcal" / "models"
+
+
+def test_match_command_cache_options(files, tmp_path, capsys, monkeypatch):
     folder, _ = files
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))  # this test's own "user cache folder"
     args = ["match", str(folder / "scan.ply"), str(folder / "car.ply")]
     assert main(args + ["--no-cache"]) == 0
-    assert not default_folder().exists() or not _entries(default_folder())
-    assert main(args) == 0  # the default: the user's cache folder (a test folder here, see conftest)
-    assert len(_entries(default_folder())) == 1
+    assert not (tmp_path / "xdg").exists()
+    assert main(args) == 0  # the default: the user's cache folder
+    assert len(_entries(tmp_path / "xdg" / "workcal" / "models")) == 1
     assert main(args + ["--cache", str(tmp_path / "mine")]) == 0 and len(_entries(tmp_path / "mine")) == 1
     (tmp_path / "a file").write_text("x")
     assert main(args + ["--cache", str(tmp_path / "a file")]) == 2
     assert "is a file" in capsys.readouterr().err
     assert main(args + ["--cache", str(tmp_path), "--no-cache"]) == 2
+    assert len(_entries(tmp_path / "xdg" / "workcal" / "models")) == 1  # --cache DIR left the default alone
+
+
+def test_calibrate_gives_the_same_result_cold_warm_and_without_cache(tmp_path):
+    """The whole calibrate command, as a user runs it twice, and once with --no-cache: one result.json."""
+    from workcal_wb.cli.simulate import write_simulation
+
+    scene = tmp_path / "scene"
+    write_simulation(scene, "car", seed=3, pitch=0.8)
+    results = {}
+    for run, cache in (("cold", ["--cache", str(tmp_path / "cache")]), ("warm", ["--cache", str(tmp_path / "cache")]),
+                       ("off", ["--no-cache"])):
+        out = tmp_path / run
+        assert main(["calibrate", "--scan", str(scene / "scan.ply"), "--workpiece", str(scene / "workpiece.ply"),
+                     "--reference", str(scene / "reference.ply"), "--out", str(out), *cache]) == 0
+        results[run] = _timeless(json.loads((out / "result.json").read_text()))
+    assert len(_entries(tmp_path / "cache")) == 2  # both models kept by the first run
+    assert results["cold"]["status"] == "ok"
+    assert json.dumps(results["cold"], sort_keys=True) == json.dumps(results["warm"], sort_keys=True)
+    assert json.dumps(results["cold"], sort_keys=True) == json.dumps(results["off"], sort_keys=True)
 
 
 def test_a_cache_folder_that_cannot_be_written_is_a_warning_not_a_failure(files, tmp_path, capsys):
