@@ -22,6 +22,7 @@ import hashlib
 import json
 import os
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -32,6 +33,7 @@ from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import METHODS
+from workcal_wb.core.model_cache import ModelCache
 from workcal_wb.core.result import FAILED, OK, CalibrationResult
 from workcal_wb.fc import prefs
 from workcal_wb.fc.placed_model import make_placed_model
@@ -74,6 +76,7 @@ class Inputs:
     regions: dict | None = None
     toolpath_points: np.ndarray | None = None
     labels: dict = field(default_factory=dict)
+    model_cache: Path | None = None  # where prepared models are kept (prefs.model_cache_folder); None: nowhere
 
     def key(self) -> str:
         """Fingerprint of the data and options: equal keys give the same calibration."""
@@ -189,15 +192,23 @@ def gather_inputs(scan, workpiece, reference, *, options: CalibrationOptions | N
     points = None if toolpath is None else toolpath_points(toolpath)
     labels = {"scan": _label(scan), "workpiece": _label(workpiece), "reference": _label(reference),
               "toolpath": "" if toolpath is None else _label(toolpath)}
-    return Inputs(scan_cloud, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels)
+    return Inputs(scan_cloud, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels,
+                  prefs.model_cache_folder())
 
 
 def run(inputs: Inputs, progress=None) -> CalibrationResult:
     """The core calibration on gathered inputs; touches no FreeCAD object, so any thread may call it.
 
-    ``progress(fraction, message)`` may raise errors.Cancelled to stop; the exception propagates."""
-    return calibrate(inputs.scan, inputs.workpiece, inputs.reference, regions=inputs.regions,
-                     toolpath_points=inputs.toolpath_points, options=inputs.options, progress=progress)
+    ``progress(fraction, message)`` may raise errors.Cancelled to stop; the exception propagates.  The
+    models are prepared once and kept in ``inputs.model_cache`` for later calibrations (also after a
+    restart); a folder that cannot be written is a warning of the result."""
+    cache = ModelCache(inputs.model_cache)
+    workpiece, reference = (cache.model(m, inputs.options.seed) for m in (inputs.workpiece, inputs.reference))
+    result = calibrate(inputs.scan, workpiece, reference, regions=inputs.regions,
+                       toolpath_points=inputs.toolpath_points, options=inputs.options, progress=progress)
+    cache.store()
+    result.warnings += cache.notes
+    return result
 
 
 # ------------------------------------------------------------------------------------- the object
