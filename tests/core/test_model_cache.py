@@ -23,6 +23,8 @@ from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.writers import write_ply
 
 ROOT = Path(__file__).resolve().parents[2]
+# The Python that runs `-m workcal_wb` (inside freecadcmd, sys.executable is FreeCAD itself).
+PYTHON = sys.executable if Path(sys.executable).name.startswith("python") else "/usr/bin/python3"
 
 
 @pytest.fixture(scope="module")
@@ -146,7 +148,7 @@ def _with_header(data: bytes, length: int, header: dict) -> bytes:
 def test_two_processes_filling_one_entry_both_succeed(files, tmp_path):
     folder, _ = files
     cache = tmp_path / "cache"
-    runs = [subprocess.Popen([sys.executable, "-m", "workcal_wb", "match", str(folder / "scan.ply"),
+    runs = [subprocess.Popen([PYTHON, "-m", "workcal_wb", "match", str(folder / "scan.ply"),
                               str(folder / "car.ply"), "--cache", str(cache), "--json", str(tmp_path / f"{i}.json")],
                              cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for i in range(2)]
     for run in runs:

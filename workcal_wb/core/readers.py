@@ -818,7 +818,8 @@ def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
     measurement with its normal), the voxel grown by sqrt(2) whenever more than max_points / 2 are
     kept, so memory stays bounded whatever the file holds.  None for any other file (read whole as
     usual).  The counts are checked both ways as for any PLY."""
-    checked_input(path)
+    if checked_input(path).stat().st_size < max_points * 12:  # under max_points vertices of 3 floats
+        return None
     with open(path, "rb") as fh:
         header = _ply_header(fh.read(_MAX_HEADER_BYTES), label)
         (vertex, *others) = header.elements
