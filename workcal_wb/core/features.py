@@ -97,11 +97,17 @@ def _pair_features(p1, n1, p2, n2):
 def _smaller_angle_second(cos1: np.ndarray, cos2: np.ndarray) -> np.ndarray:
     """acos(cos1) > acos(cos2), decided as the C library decides it: numpy's vectorised arccos can
     differ from it in the last bit, which flips near ties (nearly parallel normals are common on a
-    surface), so those are computed one by one with ``math.acos``."""
+    surface), so those are computed one by one with ``_acos``."""
     swap = cos1 < cos2
     close = np.flatnonzero(np.abs(cos1 - cos2) <= 1e-12 * np.maximum(cos1, cos2))
-    swap[close] = [math.acos(a) > math.acos(b) for a, b in zip(cos1[close].tolist(), cos2[close].tolist())]
+    swap[close] = [_acos(a) > _acos(b) for a, b in zip(cos1[close].tolist(), cos2[close].tolist())]
     return swap
+
+
+def _acos(x: float) -> float:
+    """The C library's acos: NaN (never greater) for a cosine rounded a hair past 1, where Python's
+    raises."""
+    return math.acos(x) if -1.0 <= x <= 1.0 else math.nan
 
 
 def _dot(a, b):
