@@ -12,6 +12,8 @@ fastest round, so a burst of load from other jobs does not land on one method on
 from __future__ import annotations
 
 import json
+import multiprocessing
+import os
 import shutil
 import statistics
 import subprocess
@@ -173,8 +175,9 @@ def _in_process(scene: Path, cache: Path, seed: int, repeats: int, queue) -> Non
     queue.put(runs)
 
 
-def table(runs: list, peers: list, note: str | None) -> tuple[str, list]:
-    """The section's Markdown and the targets missed."""
+def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[str, list]:
+    """The section's Markdown and the targets missed; ``load``: the machine's load average (1 min) at
+    the start and the end of the runs."""
     def median(values):
         return statistics.median(values) if values else float("nan")
 
@@ -204,6 +207,10 @@ def table(runs: list, peers: list, note: str | None) -> tuple[str, list]:
              "stock pipeline's voxel (model diagonal / 50) in mm, noise bounds not clamped, then small_gicp "
              "point-to-plane ICP (clouds thinned at voxel / 4, correspondences within 0.4 voxel as in stock's "
              "ICP, up to 100 iterations).", ""]
+    if load:
+        lines += [f"Load average (1 min) on the {multiprocessing.cpu_count()} cores, shared with other jobs: "
+                  + " at the start, ".join(f"{x:.1f}" for x in load) + " at the end: compare ratios, not "
+                  "absolute times.", ""]
     if note:
         lines += [f"Note: {note}", ""]
     lines += ["| command | method | cases | success | median time (s) | time vs faster peer | median peak memory (MB) "
@@ -245,6 +252,7 @@ def table(runs: list, peers: list, note: str | None) -> tuple[str, list]:
 
 def run(bunny: Path | None, seed: int, quick: bool, folder: Path, log=print) -> tuple[str, list]:
     """The whole-process section and the targets it missed (files and caches under ``folder``)."""
+    started = os.getloadavg()[0]
     runs, peers, note = [], [STOCK], None
     if bunny is None:
         note = "Stanford bunny data not found: the match rows were skipped."
@@ -253,4 +261,4 @@ def run(bunny: Path | None, seed: int, quick: bool, folder: Path, log=print) -> 
         if KISS not in peers:
             note = "KISS-Matcher + small_gicp not installed under build/peers (`make bench` installs them): skipped."
     runs += calibrate_runs(folder, seed, quick, log)
-    return table(runs, peers, note)
+    return table(runs, peers, note, (started, os.getloadavg()[0]))
