@@ -5,7 +5,7 @@ BUILD         := $(CURDIR)/build
 FREECAD_HOME  := $(BUILD)/freecad-home
 DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
-                 python3-hypothesis python3-pip xvfb xauth libgl1-mesa-dri
+                 python3-hypothesis python3-pip python3-distributed xvfb xauth libgl1-mesa-dri
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
                  WORKCAL_REQUIRE_PYE57=1
@@ -13,8 +13,8 @@ XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup python-packages demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
-        bench-scenes clean
+.PHONY: setup python-packages peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
+        bench-scenes bench-processes clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -47,8 +47,18 @@ FUZZ_EXAMPLES ?= 20000
 fuzz: setup
 	WORKCAL_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest $(PYTEST_ARGS) $(CURDIR)/tests/core/test_fuzz.py
 
-bench: setup
+# The whole-process table's second peer, from PyPI into build/peers (the benchmark's only; never a runtime
+# dependency). --no-deps: Debian's numpy stays the one every process imports.
+peers: setup
+	@[ -d $(BUILD)/peers/kiss_matcher ] || $(PYTHON) -m pip install --quiet --no-deps --target $(BUILD)/peers \
+	    kiss-matcher small-gicp
+
+bench: setup peers
 	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
+
+# Only the whole-process table (match and calibrate as processes, cold and warm, beside the peers).
+bench-processes: setup peers
+	$(PYTHON) -m workcal_wb bench --only processes --out $(CURDIR)/docs/benchmarks.md
 
 # Only the verdicts table (a few minutes), replacing its section of docs/benchmarks.md.
 bench-verdicts: setup

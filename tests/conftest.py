@@ -16,6 +16,19 @@ BUNNY = SHARED / "data" / "stanford-bunny"
 OUTPUT = Path(os.environ.get("WORKCAL_TEST_OUTPUT", ROOT / "build" / "test-output"))
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _own_cache_folder(tmp_path_factory):
+    """The model cache of every run in the tests (in process and in subprocesses) in a folder of the
+    session's own: the tests never read or fill the user's cache."""
+    before = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("xdg-cache"))
+    yield
+    if before is None:
+        os.environ.pop("XDG_CACHE_HOME", None)
+    else:
+        os.environ["XDG_CACHE_HOME"] = before
+
+
 @pytest.fixture
 def output_dir(request) -> Path:
     """A folder for this test's artefacts (screenshots, reports) that survives the run."""

@@ -93,3 +93,60 @@ def test_verdict_table_counts_statuses_and_wrong_oks():
     assert "| g | 3 | 1 / 1 | 1 / 0 | 0 / 0 |" in text and "| h | 2 | 0 / 0 | 1 / 0 | 1 / 0 |" in text
     assert "wrong poses reported \"ok\": **1** (goal 0): b" in text
     assert "not reported \"ok\": **1 of 2** (goal 0)" in text
+
+
+def test_whole_process_peak_memory_is_the_processs_own(tmp_path):
+    """A command's peak memory is its own, not that of the (large) process that measures it."""
+    from workcal_wb.core.benchmark.processes import PYTHON, timed
+
+    ballast = np.ones(40_000_000)  # 320 MB in the measuring process
+    _, small = timed([PYTHON, "-c", "import numpy"])
+    _, large = timed([PYTHON, "-c", "import numpy; a = numpy.ones(25_000_000)"])  # 200 MB more
+    assert small < 150 < 190 < large < 320 and ballast[-1] == 1
+
+
+def test_whole_process_table_flags_missed_targets():
+    from workcal_wb.core.benchmark.processes import COLD, KISS, STOCK as PEER, WARM, Run, table
+
+    def runs(command, method, time_s, peak, success=True, n=4):
+        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0) for i in range(n)]
+
+    good = (runs("match", COLD, 0.8, 300) + runs("match", WARM, 0.2, 300) + runs("match", PEER, 1.0, 400)
+            + runs("match", KISS, 0.8, 200) + runs("calibrate", WARM, 0.9, 350)
+            + runs("calibrate", "WorkCal in-process (warm)", 0.25, 350))
+    text, missed = table(good, [PEER, KISS], None)
+    assert not missed and "All met." in text
+    assert "| match | WorkCal warm | 4 | 100% | 0.200 | 0.25 | 300 | 300 |" in text  # vs the faster peer (0.8 s)
+    bad = (runs("match", WARM, 0.3, 500, success=False) + runs("match", PEER, 1.0, 400)
+           + runs("match", KISS, 0.6, 200) + runs("calibrate", WARM, 1.2, 350)
+           + runs("calibrate", "WorkCal in-process (warm)", 0.4, 350))
+    text, missed = table(bad, [PEER, KISS], "a note")
+    assert len(missed) == 4 and "Note: a note" in text
+    assert "0.50 x KISS-Matcher" in missed[0] and "success 75% vs 100%" in missed[0]
+    assert "1.20 s as a process" in missed[1] and "0.40 s in-process" in missed[2]
+    assert "500 MB above stock Open3D's 400 MB" in missed[3]  # match against match: calibrate's 350 MB not counted
+
+
+def test_a_section_replaces_its_old_version_and_keeps_the_rest():
+    from workcal_wb.core.benchmark.run import _with_section
+
+    page = "# Benchmark\n\n## Summary\n\nold table\n\n## Verdicts\n\nverdicts\n\n## Scenes\n\nscenes\n"
+    added = _with_section(page, "## Whole processes\n\nfirst\n")
+    assert added == ("# Benchmark\n\n## Summary\n\nold table\n\n## Whole processes\n\nfirst\n\n## Verdicts\n\n"
+                     "verdicts\n\n## Scenes\n\nscenes\n")
+    replaced = _with_section(added, "## Whole processes\n\nsecond\n")
+    assert replaced == added.replace("first", "second")
+    assert _with_section(replaced, "## Scenes\n\nnew\n") == replaced.replace("\nscenes\n", "\nnew\n")
+    assert _with_section("", "## Scenes\n\nonly\n") == "## Scenes\n\nonly\n"
+
+
+def test_peers_read_the_files_workcal_writes(tmp_path):
+    from workcal_wb.core.benchmark.peers import read_vertices
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.writers import write_ply
+
+    points = np.random.default_rng(1).normal(size=(100, 3)) * 50
+    write_ply(tmp_path / "mesh.ply", Cloud(points, triangles=np.array([[0, 1, 2], [2, 3, 4]])))
+    write_ply(tmp_path / "normals.ply", Cloud(points, normals=np.tile([0.0, 0.0, 1.0], (100, 1))))
+    for name in ("mesh.ply", "normals.ply"):
+        assert np.array_equal(read_vertices(tmp_path / name), points)

@@ -113,17 +113,37 @@ def test_bad_input_after_an_ok_run_removes_the_earlier_set(ok_run, scene, tmp_pa
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]  # nothing stale beside the error
 
 
-def test_an_interrupt_between_the_writes_leaves_the_earlier_set_whole(ok_run, scene, tmp_path, monkeypatch):
+def test_an_interrupt_before_the_program_leaves_the_earlier_set_whole(ok_run, scene, tmp_path, monkeypatch):
     # The finding: SIGINT between the writes left a new result.json beside the old program.
     out = fresh_copy(ok_run, scene, tmp_path)
     before = snapshot(out)
 
     def interrupted(*args, **kwargs):
-        raise KeyboardInterrupt  # Ctrl-C after result.json, before the report and the program
+        raise KeyboardInterrupt  # Ctrl-C after result.json, before the program
+
+    monkeypatch.setattr("workcal_wb.cli.calibrate.export", interrupted)
+    assert main(calibrate_args(scene, out, "--seed", "3")) == 130
+    assert snapshot(out) == before
+
+
+def test_the_result_and_program_are_in_before_the_report(ok_run, scene, tmp_path, monkeypatch, capsys):
+    """The critical path first: result.json and the program are committed as a set before the report's
+    figures are drawn; an interrupt while drawing them leaves that set (never the earlier report)."""
+    out = fresh_copy(ok_run, scene, tmp_path)
+    seen = {}
+
+    def interrupted(calibration, folder, **kwargs):
+        seen["then"] = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))  # not the staging
+        raise KeyboardInterrupt  # Ctrl-C while the figures are drawn
 
     monkeypatch.setattr(report_module, "write_report", interrupted)
     assert main(calibrate_args(scene, out, "--seed", "3")) == 130
-    assert snapshot(out) == before
+    assert seen["then"] == ["manifest.json", "notes.txt", "result.json", "result.regions.npz",
+                            "toolpath_calibrated.src"]
+    assert sorted(p.name for p in out.iterdir()) == seen["then"]
+    assert json.loads((out / "result.json").read_text())["seed"] == 3  # this run's, not the earlier one
+    assert_manifest_is_the_folder(out, "ok")
+    assert "the report was not written" in capsys.readouterr().err
 
 
 def test_a_program_in_another_format_replaces_the_earlier_one(ok_run, scene, tmp_path):

@@ -147,3 +147,45 @@ def test_pts_count_line_is_checked_both_ways(tmp_path):
         read_cloud(write(tmp_path, "few.pts", "6\n" + points))
     with pytest.raises(InputError, match=r"many.pts: line 4: data continues after the 2 points"):
         read_cloud(write(tmp_path, "many.pts", "2\n" + points))
+
+
+def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
+    """A binary PLY scan with more points than ``max_points`` is read in chunks and thinned (one real
+    point per voxel, with its normal), saying so; its counts are still checked both ways."""
+    from workcal_wb.core import readers
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.writers import write_ply
+
+    rng = np.random.default_rng(3)
+    u, v = rng.random((2, 60000)) * 100
+    points = np.column_stack([u, v, 5 * np.sin(u / 10) + rng.normal(0, 0.05, len(u))])
+    normals = np.tile([0.0, 0.0, 1.0], (len(u), 1))
+    path = tmp_path / "dense.ply"
+    write_ply(path, Cloud(points, normals))
+    whole = readers.read_cloud(path)
+    assert len(whole) == 60000 and not any("thinned" in w for w in whole.warnings)
+    readers_chunk = readers.THIN_CHUNK
+    try:
+        readers.THIN_CHUNK = 7000  # several chunks, the grid coarsened on the way
+        thinned = readers.read_cloud(path, max_points=10000)
+    finally:
+        readers.THIN_CHUNK = readers_chunk
+    assert 1000 < len(thinned) <= 5000
+    assert any("60,000 points" in w and f"to {len(thinned):,}" in w for w in thinned.warnings)
+    rows = {tuple(p) for p in points}
+    assert all(tuple(p) in rows for p in thinned.points)  # real points, not averages
+    assert np.array_equal(thinned.normals, np.tile([0.0, 0.0, 1.0], (len(thinned), 1)))
+    # spread over the whole surface: every 10 x 10 mm cell of it keeps points
+    cells = np.unique(np.floor(thinned.points[:, :2] / 10).astype(int), axis=0)
+    assert len(cells) == 100
+    data = path.read_bytes()
+    (tmp_path / "cut.ply").write_bytes(data[:-240])
+    with pytest.raises(InputError, match="declares 60000 vertices, data ends after 59995"):
+        readers.read_cloud(tmp_path / "cut.ply", max_points=10000)
+    (tmp_path / "long.ply").write_bytes(data + b"\0" * 48)
+    with pytest.raises(InputError, match="data continues after the 60000 vertices"):
+        readers.read_cloud(tmp_path / "long.ply", max_points=10000)
+    # The scanner's position a PLY states (issue 11) survives the thinning, in mm as the points.
+    (tmp_path / "seen.ply").write_bytes(data.replace(b"comment written by WorkCal", b"comment viewpoint 1 2 3", 1))
+    seen = readers.read_cloud(tmp_path / "seen.ply", units="cm", max_points=10000)
+    assert np.array_equal(seen.sensors, [[10.0, 20.0, 30.0]]) and len(seen) < 60000

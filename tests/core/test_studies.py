@@ -9,6 +9,7 @@ import pytest
 from workcal_wb.cli import main
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
+from workcal_wb.core.parallel import Runner
 from workcal_wb.core.simulate.scene import build_scene
 from workcal_wb.core.studies import STUDIES, StudySettings, run_study
 from workcal_wb.core.studies.common import TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM
@@ -142,6 +143,35 @@ def test_object_size_compares_figurine_and_car(studies):
             assert row["relative_surface_error"] == pytest.approx(row["surface_error_mm"] / row["diagonal_mm"])
 
 
+def _timeless(result) -> list:
+    """A study's rows without the calibrations' timings, the one column that differs run to run."""
+    return [{k: v for k, v in row.items() if k != "time_s"} for row in result.to_dict()["rows"]]
+
+
+@pytest.mark.parametrize("name", ["placement", "point-count"])
+def test_a_study_gives_the_same_rows_in_a_process_pool(studies, name):
+    pooled = run_study(name, settings=QUICK, runner=Runner(workers=2))
+    serial = studies[1][name]
+    assert len(pooled.rows) >= 2 and _timeless(pooled) == _timeless(serial)
+    assert pooled.targets == serial.targets
+
+
+def test_a_study_gives_the_same_rows_on_a_dask_cluster(studies):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        runner = Runner(scheduler=cluster.scheduler_address)
+        assert "Dask" in runner.describe()
+        on_dask = run_study("placement", settings=QUICK, runner=runner)
+    assert _timeless(on_dask) == _timeless(studies[1]["placement"])
+
+
+def test_an_unreachable_scheduler_is_a_clear_error(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    assert main(["study", "placement", "--out", str(tmp_path), "--quick", "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
 def test_bad_study_settings_are_refused(tmp_path):
     with pytest.raises(InputError, match="regions must be one of"):
         StudySettings(regions="guess")
@@ -181,6 +211,8 @@ def test_cli_exit_code_1_when_a_target_is_missed(tmp_path, capsys):
     (["--tolerance", "0"], "argument --tolerance: must be a number > 0"),
     (["--tolerance", "inf"], "argument --tolerance: must be a finite number"),
     (["--seed", "-5"], "argument --seed: must be a whole number from 0"),
+    (["--workers", "0"], "argument --workers: must be at least 1"),
+    (["--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"], "not allowed with argument"),
 ])
 def test_cli_bad_input_exits_2(tmp_path, capsys, argv, message):
     assert main(["study", "placement", "--out", str(tmp_path), "--quick", *argv]) == 2

@@ -366,3 +366,57 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     assert co.options_of(obj).scanner_origin is None and co.options_of(obj).up is None
     assert obj.Status == "ok"
     assert_pose(matrix(obj.W), scene.W)
+
+
+def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, monkeypatch):
+    """The models are prepared once and reused from the folder the preferences name (the user's cache
+    folder by default); turned off, nothing is kept.  The result is the same either way."""
+    from workcal_wb.core import model_cache
+    from workcal_wb.core.model_cache import SUFFIX, default_folder
+    from workcal_wb.fc import inputs as fc_inputs
+    from workcal_wb.fc import prefs
+    from workcal_wb.fc.memo import LastResult
+
+    def run(inputs):  # without the last result remembered by the inputs' key, which would hide the cache
+        monkeypatch.setattr(fc_inputs, "_last", LastResult())
+        return fc_inputs.run(inputs)
+
+    def gather():
+        return fc_inputs.gather_inputs(objs["scan"], objs["workpiece"], objs["reference"])
+
+    doc, objs = document
+    prepared = []
+
+    class Counted(model_cache.SurfaceModel):  # counts the models prepared (a hit is loaded, not prepared)
+        def __init__(self, *args, **kwargs):
+            prepared.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(model_cache, "SurfaceModel", Counted)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    prefs.reset()
+    try:
+        assert prefs.model_cache_folder() == default_folder() == tmp_path / "xdg" / "workcal" / "models"
+        prefs.set("ModelCacheDir", str(tmp_path / "mine"))
+        inputs = gather()
+        assert inputs.model_cache == tmp_path / "mine"
+        first = run(inputs)
+        kept = sorted((tmp_path / "mine").glob(f"*{SUFFIX}"))
+        assert first.status == "ok" and len(kept) == 2 and len(prepared) == 2
+        again = run(gather())
+        assert len(prepared) == 2  # both models came from the folder
+        prefs.set("KeepPreparedModels", 0)
+        off = gather()
+        assert off.model_cache is None
+        fresh = run(off)
+        assert len(prepared) == 4
+        for result in (again, fresh):
+            assert np.array_equal(result.W, first.W) and result.status == first.status
+        assert not (tmp_path / "xdg").exists() and sorted((tmp_path / "mine").glob(f"*{SUFFIX}")) == kept
+        prefs.set("KeepPreparedModels", 1)
+        prefs.set("ModelCacheDir", str(tmp_path / "a file" / "cache"))  # cannot be made: a warning, a result
+        (tmp_path / "a file").write_text("x")
+        blocked = run(gather())
+        assert blocked.status == "ok" and any("model cache" in w for w in blocked.warnings)
+    finally:
+        prefs.reset()

@@ -36,13 +36,16 @@ def without_open3d(monkeypatch):
 
 @pytest.fixture(scope="module")
 def scene():
-    """A small simulated scene: every fourth point of its scan and the two models."""
+    """A small simulated scene: every fourth point of its scan and the two models as points (Points
+    objects): their normals need open3d (a meshed model does not: its faces give them)."""
     from workcal_wb.core.simulate.scanner import Scanner
     from workcal_wb.core.simulate.scene import build_scene
 
     world = build_scene("car", seed=0)
     scan = Scanner.aimed_at(world).scan(world)
-    return Cloud(scan.points[::4], name="scene scan"), world.workpiece_model(), world.reference_model()
+    workpiece, reference = (Cloud(model.points, name=model.name)
+                            for model in (world.workpiece_model(), world.reference_model()))
+    return Cloud(scan.points[::4], name="scene scan"), workpiece, reference
 
 
 @pytest.fixture

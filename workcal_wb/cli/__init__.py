@@ -74,14 +74,16 @@ def _stop(signum, frame):
     raise Stopped(signum)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand, or only of ``command``: a run imports the modules of its own
+    subcommand, not those of the others (a match need not load the toolpath exporters)."""
     parser = _Parser(
         prog="python3 -m workcal_wb",
         description="WorkCal: locate a freeform workpiece for a robot or CNC machine from one 3D scan.",
     )
     parser.add_argument("--version", action="version", version=f"WorkCal {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
+    for name in [command] if command in SUBCOMMANDS else SUBCOMMANDS:
         module = importlib.import_module(f"workcal_wb.cli.{name}")
         module.add_parser(sub).set_defaults(run=module.run)
     return parser
@@ -105,7 +107,8 @@ def exit_status(error: BaseException) -> int:
 def main(argv=None) -> int:
     from workcal_wb.core.errors import WorkCalError
 
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv[0] if argv else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a bad argument (argparse has said why)
@@ -124,7 +127,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:
         stopped_by = getattr(exc, "signum", signal.SIGINT)
         print(f"workcal {args.command}: {'interrupted' if stopped_by == signal.SIGINT else 'terminated'}; "
-              "outputs are as before the run", file=sys.stderr)
+              f"{getattr(exc, 'outputs', 'outputs are as before the run')}", file=sys.stderr)
         return exit_status(exc)
     except WorkCalError as exc:
         print(f"workcal {args.command}: error: {exc}", file=sys.stderr)

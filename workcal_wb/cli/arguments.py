@@ -76,3 +76,39 @@ def input_file(text: str) -> str:
     except InputError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return text
+
+
+def add_cache_options(parser) -> None:
+    """--cache DIR / --no-cache: where prepared models are kept between runs (core/model_cache.py)."""
+    from workcal_wb.core.model_cache import default_folder
+
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--cache", metavar="DIR", type=cache_folder,
+                       help=f"folder of prepared models, reused by later runs on the same model files "
+                            f"(default {default_folder()})")
+    group.add_argument("--no-cache", action="store_true", help="prepare the models anew and keep nothing")
+
+
+def cache_folder(text: str) -> str:
+    """A folder for the model cache (made when first written): not a file."""
+    import os
+
+    if os.path.exists(text) and not os.path.isdir(text):
+        raise argparse.ArgumentTypeError(f"{text}: is a file, not a folder")
+    return text
+
+
+def model_cache(args):
+    """The ModelCache the options ask for."""
+    from workcal_wb.core.model_cache import ModelCache, default_folder
+
+    return ModelCache(None if args.no_cache else (args.cache or default_folder()))
+
+
+def keep_models(cache) -> None:
+    """Store what the run prepared (after its outputs); a cache that cannot be written is a warning."""
+    import sys
+
+    cache.store()
+    for note in cache.notes:
+        print(f"warning: {note}", file=sys.stderr)

@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import finite, input_file, positive, seed
+from workcal_wb.cli.arguments import add_cache_options, finite, input_file, keep_models, model_cache, positive, seed
 from workcal_wb.cli.toolpath import add_machine_options, read_options
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.outputs import OutputFolder
-from workcal_wb.core.readers import read_cloud
+from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
 from workcal_wb.core.result import FAILED, OK
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
@@ -64,6 +64,7 @@ def add_parser(subparsers):
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
     add_machine_options(p)
+    add_cache_options(p)
     return p
 
 
@@ -102,16 +103,17 @@ def read_indices(path, scan_points: int) -> np.ndarray:
     return np.array(values, dtype=np.int64)
 
 
-def read_model(path, units: str) -> Cloud:
-    """A model file; CAD solids (STEP, IGES, BREP) are tessellated through FreeCAD when it is there."""
+def read_model(path, units: str, cache, seed: int):
+    """A model file, prepared (a SurfaceModel, from ``cache`` when it holds it); CAD solids (STEP,
+    IGES, BREP) are tessellated through FreeCAD when it is there."""
     if Path(path).suffix.lower() not in CAD_SUFFIXES:
-        return read_cloud(path, units=units, unit_option="--model-units")
+        return cache.model_file(path, units=units, seed=seed, unit_option="--model-units")
     try:
         from workcal_wb.fc.models import read_model_file
     except ImportError:
         raise InputError(f"{path}: STEP/IGES/BREP models are read through FreeCAD; run this command inside "
                          "freecadcmd (see the README), or export the model as STL") from None
-    return read_model_file(path, units)
+    return cache.model(read_model_file(path, units), seed=seed)
 
 
 def warn(clouds) -> None:
@@ -124,11 +126,12 @@ def run(args) -> int:
     from workcal_wb.core.report import write_report
 
     inputs = [*args.scan, args.workpiece, args.reference, args.toolpath, args.workpiece_indices, args.reference_indices]
+    cache = model_cache(args)
     with OutputFolder(args.out, "calibrate", OUTPUTS, keep=[p for p in inputs if p]) as outputs:
-        scans = [read_cloud(f, units=args.units, unit_option="--units") for f in args.scan]
+        scans = [read_cloud(f, units=args.units, unit_option="--units", max_points=LARGE_SCAN_POINTS) for f in args.scan]
         model_units = args.model_units or args.units
-        workpiece = read_model(args.workpiece, model_units)
-        reference = read_model(args.reference, model_units)
+        workpiece = read_model(args.workpiece, model_units, cache, args.seed)
+        reference = read_model(args.reference, model_units, cache, args.seed)
         warn([*scans, workpiece, reference])
         toolpath = read_gcode(args.toolpath, **read_options(args)) if args.toolpath else None
         merged = merge_scans(scans)
@@ -137,18 +140,25 @@ def run(args) -> int:
         result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
                            toolpath_points=None if toolpath is None else path_points(toolpath)[0])
 
+        # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
-        region = result.regions.get("workpiece")
-        write_report(result, outputs.folder(), workpiece_points=None if region is None else merged.points[region],
-                     workpiece_model=workpiece)
         refused = _program(args, toolpath, result, outputs)
-        manifest = outputs.commit(result.status)
+        outputs.commit(result.status)
+        region = result.regions.get("workpiece")
+        try:
+            write_report(result, outputs.folder(), workpiece_points=None if region is None else merged.points[region],
+                         workpiece_model=workpiece)
+            manifest = outputs.commit(result.status, adding=True)
+        except KeyboardInterrupt as stop:
+            stop.outputs = f"{args.out} holds this run's result.json and program; the report was not written"
+            raise
     print(result.summary())
     print(f"wrote {args.out}: {', '.join(manifest['files'])}")
     if refused:
         print(f"workcal calibrate: toolpath not written: {refused}", file=sys.stderr)
     elif toolpath is not None and result.status != OK:
         print(f"workcal calibrate: warning: FORCED program from a {result.status!r} calibration", file=sys.stderr)
+    keep_models(cache)
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
 

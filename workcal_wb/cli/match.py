@@ -5,10 +5,10 @@ import json
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import finite, input_file, positive, seed
+from workcal_wb.cli.arguments import add_cache_options, finite, input_file, keep_models, model_cache, positive, seed
 from workcal_wb.core.match import METHODS, match
 from workcal_wb.core.outputs import check_file
-from workcal_wb.core.readers import read_cloud
+from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
 from workcal_wb.core.result import FAILED
 from workcal_wb.core.units import mm_per_unit
 
@@ -34,14 +34,17 @@ def add_parser(subparsers):
                    help="where the scanner was, in the scan's frame and units (e.g. 0 0 0 for a scan in the scanner's "
                         "own coordinates); by default it is estimated from the matched surface")
     p.add_argument("--seed", type=seed, default=0, help="seed for the random parts (repeatable runs)")
+    add_cache_options(p)
     return p
 
 
 def run(args) -> int:
     if args.json:
         check_file(args.json)
-    scan = read_cloud(args.scan, units=args.units, unit_option="--units")
-    model = read_cloud(args.model, units=args.model_units or args.units, unit_option="--model-units")
+    cache = model_cache(args)
+    scan = read_cloud(args.scan, units=args.units, unit_option="--units", max_points=LARGE_SCAN_POINTS)
+    model = cache.model_file(args.model, units=args.model_units or args.units, seed=args.seed,
+                             unit_option="--model-units")
     for warning in scan.warnings + model.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     viewpoint = None if args.viewpoint is None else tuple(v * mm_per_unit(args.units) for v in args.viewpoint)
@@ -52,4 +55,5 @@ def run(args) -> int:
 
         atomic_write_text(args.json, json.dumps(result.to_dict(), indent=2, allow_nan=True) + "\n")
         print(f"wrote {args.json}")
+    keep_models(cache)
     return EXIT_FAILED if result.status == FAILED else EXIT_OK

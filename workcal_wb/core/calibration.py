@@ -17,7 +17,7 @@ import numpy as np
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import METHODS, MatchOptions, match
+from .match import METHODS, MatchOptions, match, match_pose
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
@@ -270,7 +270,7 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
         for role, surface, pose in zip(roles, surfaces, poses):
             draw = rng.choice(regions[role], n[role], replace=True)
             start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
-            refit.append(match(scan.subset(draw, name=f"{role} resample"), surface, init=start, **match_options).matrix)
+            refit.append(match_pose(scan.subset(draw, name=f"{role} resample"), surface, start, **match_options))
         W_r = frames.invert(refit[1]) @ refit[0]
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():

@@ -1,16 +1,123 @@
-"""Local shape descriptors for global search (FPFH, Rusu et al. 2009, as open3d computes them)."""
+"""Local shape descriptors for global search: Fast Point Feature Histograms (Rusu et al. 2009).
+
+Computed with numpy and a KD-tree, the way open3d's ``compute_fpfh_feature`` defines them (its
+neighbourhoods, angle conventions, 11 bins per angle and the inverse squared distance weights), so
+the features are open3d's to rounding, without importing open3d: a match against a prepared model
+then needs no library that takes a second to load.
+"""
 from __future__ import annotations
 
-import numpy as np
+import math
 
-from .errors import require_open3d
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.spatial import cKDTree
+
+BINS = 11
 
 
 def fpfh(points: np.ndarray, normals: np.ndarray, radius: float, max_nn: int = 100) -> np.ndarray:
-    """(N, 33) Fast Point Feature Histograms; consistent normal orientation matters for matching."""
-    o3d = require_open3d()
-    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    pcd.normals = o3d.utility.Vector3dVector(normals)
-    feature = o3d.pipelines.registration.compute_fpfh_feature(
-        pcd, o3d.geometry.KDTreeSearchParamHybrid(radius=radius, max_nn=max_nn))
-    return np.asarray(feature.data).T.copy()
+    """(N, 33) Fast Point Feature Histograms over the ``max_nn`` nearest neighbours within ``radius``;
+    consistent normal orientation matters for matching."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    normals = np.ascontiguousarray(normals, dtype=np.float64)
+    n = len(points)
+    if n < 2:
+        return np.zeros((n, 3 * BINS))
+    rows, cols, squared = _neighbours(points, radius, min(max_nn, n))
+    count = np.bincount(rows, minlength=n)
+    spfh = _simple_histograms(points, normals, rows, cols, count)
+    # Each neighbour's SPFH weighted by its inverse squared distance, summed nearest first (a sparse
+    # product adds a row's entries in the order they are stored).
+    near = squared > 0
+    starts = np.concatenate([[0], np.cumsum(np.bincount(rows[near], minlength=n))])
+    weights = csr_matrix((1.0 / squared[near], cols[near], starts), shape=(n, n))
+    features = (weights @ spfh).reshape(n, 3, BINS)
+    sums = features.sum(axis=2)
+    features *= np.divide(100.0, sums, out=np.ones_like(sums), where=sums != 0)[:, :, None]
+    features = features.reshape(n, 3 * BINS) + spfh
+    features[count == 0] = 0.0
+    return features
+
+
+def _neighbours(points: np.ndarray, radius: float, max_nn: int):
+    """(point, neighbour, squared distance) for each point's nearest ``max_nn`` neighbours closer than
+    ``radius``, itself excluded, nearest first, point by point."""
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    rows, cols = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+    offset = points[cols] - points[rows]
+    squared = offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1] + offset[:, 2] * offset[:, 2]
+    order = np.argsort(squared, kind="stable")
+    order = order[np.argsort(rows[order], kind="stable")]
+    rows, cols, squared = rows[order], cols[order], squared[order]
+    rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
+    keep = (rank < max_nn - 1) & (squared < radius * radius)  # max_nn counts the point itself
+    return rows[keep], cols[keep], squared[keep]
+
+
+def _simple_histograms(points, normals, rows, cols, count) -> np.ndarray:
+    """SPFH: per point, the histograms of the three Darboux-frame angles to each neighbour, each
+    neighbour adding 100 / (neighbours) to one bin of each."""
+    f1, f2, f3 = _pair_features(points[rows], normals[rows], points[cols], normals[cols])
+    bins = np.empty((len(rows), 3), np.int64)
+    # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
+    bins[:, 0] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
+    bins[:, 1] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
+    bins[:, 2] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
+    bins += rows[:, None] * (3 * BINS) + BINS * np.arange(3)
+    increment = 100.0 / np.maximum(count[rows], 1)
+    return np.bincount(bins.ravel(), weights=np.repeat(increment, 3),
+                       minlength=len(points) * 3 * BINS).reshape(-1, 3 * BINS)
+
+
+def _pair_features(p1, n1, p2, n2):
+    """The three angles of each pair (point 1 with its normal, point 2 with its): the source of the
+    Darboux frame is the point whose normal makes the smaller angle with the line joining them."""
+    d = p2 - p1
+    length = np.sqrt(_dot(d, d))
+    safe = np.where(length > 0, length, 1.0)
+    angle1 = _dot(n1, d) / safe
+    angle2 = _dot(n2, d) / safe
+    swap = _smaller_angle_second(np.abs(angle1), np.abs(angle2))
+    source = np.where(swap[:, None], n2, n1)
+    target = np.where(swap[:, None], n1, n2)
+    d[swap] *= -1
+    f3 = np.where(swap, -angle2, angle1)
+    v = _cross(d, source)
+    v_norm = np.sqrt(_dot(v, v))
+    v /= np.where(v_norm > 0, v_norm, 1.0)[:, None]
+    f2 = _dot(v, target)
+    f1 = np.arctan2(_dot(_cross(source, v), target), _dot(source, target))
+    degenerate = (length == 0) | (v_norm == 0)  # a point on itself, or a normal along the joining line
+    if degenerate.any():
+        f1[degenerate] = f2[degenerate] = f3[degenerate] = 0.0
+    return f1, f2, f3
+
+
+def _smaller_angle_second(cos1: np.ndarray, cos2: np.ndarray) -> np.ndarray:
+    """acos(cos1) > acos(cos2), decided as the C library decides it: numpy's vectorised arccos can
+    differ from it in the last bit, which flips near ties (nearly parallel normals are common on a
+    surface), so those are computed one by one with ``_acos``."""
+    swap = cos1 < cos2
+    close = np.flatnonzero(np.abs(cos1 - cos2) <= 1e-12 * np.maximum(cos1, cos2))
+    swap[close] = [_acos(a) > _acos(b) for a, b in zip(cos1[close].tolist(), cos2[close].tolist())]
+    return swap
+
+
+def _acos(x: float) -> float:
+    """The C library's acos: NaN (never greater) for a cosine rounded a hair past 1, where Python's
+    raises."""
+    return math.acos(x) if -1.0 <= x <= 1.0 else math.nan
+
+
+def _dot(a, b):
+    """Row-wise dot products of (N, 3) arrays, summed x, y, z in order (as open3d's C++ does)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def _cross(a, b):
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out

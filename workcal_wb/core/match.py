@@ -143,7 +143,18 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
         return _match(scan, model, init, options)
 
 
-def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
+def match_pose(scan: Cloud, model, init: np.ndarray, options: MatchOptions = MatchOptions(),
+               **overrides) -> np.ndarray | None:
+    """U exactly as ``match(scan, model, init)`` finds it, without the statistics and the verdict that
+    follow once the pose is chosen (a bootstrap refit needs the pose alone); None where ``match``
+    gives no matrix."""
+    options = _checked_options(replace(options, **overrides))
+    with pointops.single_threaded_blas():
+        found = _match(scan, model, init, options, pose_only=True)
+    return found.matrix if isinstance(found, MatchResult) else found
+
+
+def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = False):
     timer = PhaseTimer()
     with timer("model"):
         surface = model if isinstance(model, SurfaceModel) else SurfaceModel(checked(model, 3), options.seed)
@@ -190,6 +201,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions) -> MatchResult:
         best, judged = judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
                                   lambda state: _widened(state, medium, surface),
                                   lambda state: _through_the_wall(state, medium, surface, gate))
+        if pose_only:
+            return frames.invert(best.T)
         return _verdict(scan, sample, surface, best, judged, judge, options, voxel, result, timer)
 
 

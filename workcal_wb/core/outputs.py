@@ -86,6 +86,7 @@ class OutputFolder:
         self.keep = {os.path.realpath(p) for p in keep}
         self.staging: Path | None = None
         self.committed = False
+        self._listed: dict = {}  # the files of the set committed so far (manifest entries)
 
     def __enter__(self) -> "OutputFolder":
         check_folder(self.path)
@@ -113,22 +114,30 @@ class OutputFolder:
                 raise OutputError(f"{self.path}: cannot write the outputs ({exc.strerror or exc})") from None
         return self.staging
 
-    def commit(self, status: str) -> dict:
-        """Swap the staged files in as the folder's set; returns the manifest written."""
+    def commit(self, status: str, adding: bool = False) -> dict:
+        """Swap the staged files in as the folder's set; returns the manifest written.  With ``adding``
+        the files staged since this run's last commit join its set (what a robot needs is committed
+        first, the report with its figures after it)."""
         staged = sorted(os.listdir(self.staging)) if self.staging is not None else []
         files = {name: _digest(self.staging / name) for name in staged}
+        listed = dict(self._listed) if adding and self.committed else {}
+        listed.update({k: v for name in staged for k, v in _flat(name, files[name])})
         manifest = {"format": MANIFEST_FORMAT, "version": 1, "command": self.command, "status": status,
                     "written": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
-                    "files": {k: v for name in staged for k, v in _flat(name, files[name])}}
+                    "files": listed}
         try:
             with _locked(self.path), signals_deferred():
-                self._remove_previous(keep=set(staged))
+                if not (adding and self.committed):
+                    self._remove_previous(keep=set(staged))
                 for name in staged:
                     os.replace(self.staging / name, self.path / name)
                 atomic_write_text(self.path / MANIFEST, json.dumps(manifest, indent=2) + "\n")
         except OSError as exc:
             raise OutputError(f"{self.path}: cannot write the outputs ({exc.strerror or exc})") from None
-        self.committed = True
+        self.committed, self._listed = True, listed
+        if self.staging is not None:  # the next files a run stages start a new staging folder
+            shutil.rmtree(self.staging, ignore_errors=True)
+            self.staging = None
         return manifest
 
     def _remove_previous(self, keep: set) -> None:

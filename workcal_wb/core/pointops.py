@@ -69,6 +69,13 @@ def _openblas():
     return None
 
 
+def lengths(vectors: np.ndarray) -> np.ndarray:
+    """Length of each row of an (N, 3) array: np.linalg.norm(vectors, axis=1) to the bit (the same
+    sums in the same order), computed a column at a time, which numpy does 2-3x faster."""
+    x, y, z = vectors[:, 0], vectors[:, 1], vectors[:, 2]
+    return np.sqrt(x * x + y * y + z * z)
+
+
 def median_spacing(points: np.ndarray, sample: int = 20000, seed: int = 0) -> float:
     """Median distance from a point to its nearest neighbour (the scan's resolution).
 

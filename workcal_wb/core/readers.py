@@ -9,8 +9,11 @@ Python loops only walk records whose length varies (mixed polygons, Cyberware ``
 """
 from __future__ import annotations
 
+import os
 import re
 import struct
+import warnings
+from functools import cached_property
 from pathlib import Path
 from typing import NamedTuple
 
@@ -40,12 +43,15 @@ class _Parsed(NamedTuple):
     sensor_of: np.ndarray | None = None  # which of them saw each point
 
 
-def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit") -> Cloud:
+def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_option: str = "unit",
+               max_points: int | None = None) -> Cloud:
     """Read a point cloud or mesh file into a checked ``Cloud`` in mm.
 
     ``units`` is the file's length unit; ``None`` uses the ``comment units`` line of a PLY written by
     WorkCal (mm when there is none).  ``name`` defaults to the file name.  ``unit_option`` is how the
     caller's user sets the unit (e.g. "--model-units"), named in a warning about a suspect size.
+    ``max_points``: a binary PLY point cloud holding more points is read in chunks and thinned as it
+    is read (``_thinned_ply``), so it is never in memory whole; a warning says so.
     """
     path = Path(path)
     parse = _PARSERS.get(path.suffix.lower())
@@ -59,7 +65,9 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_opt
         parsed, units = _read_e57(path, label), "m"
         scale = mm_per_unit(units)
     else:
-        parsed = _parsed(parse, read_bytes(path), label)
+        parsed = _thinned_ply(path, label, max_points) if max_points and parse is _parse_ply else None
+        if parsed is None:
+            parsed = _parsed(parse, read_bytes(path), label)
     if scale is None:
         units = parsed.units or "mm"
         try:
@@ -116,6 +124,18 @@ def _check_binary_end(data: bytes, end: int, label: str, declared: int, noun: st
     where = _binary_tail(data, end)
     if where:
         raise _trailing(label, where, declared, noun)
+
+
+def _numbers(text: bytes, count: int) -> np.ndarray | None:
+    """The ``count`` whitespace-separated numbers of ``text`` parsed at once, or None when they are
+    not that many numbers (some token is not one: the caller names it)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # numpy warns, and will raise, when a token is not a number
+        try:
+            values = np.fromstring(text, dtype=np.float64, sep=" ")
+        except ValueError:
+            return None
+    return values if len(values) == count else None
 
 
 def _line_of_token(text: bytes, index: int) -> int:
@@ -258,7 +278,7 @@ def _parse_ply(data: bytes, label: str) -> _Parsed:
                                if p.name in _PLY_FACE_LISTS and p.length_type), None)
     wanted = {"vertex"} | ({"face"} if face_list else set())
     if header.byte_order is None:
-        body = _AsciiPlyBody(data[header.body_start:].split(), label)
+        body = _AsciiPlyBody(data[header.body_start:], label)
     else:
         body = _BinaryPlyBody(data, header.byte_order, label)
     values, pos = {}, header.body_start if header.byte_order else 0
@@ -346,7 +366,11 @@ def _ply_element(body, element: _PlyElement, pos: int, keep: bool):
 
 
 def _walk_list_lengths(body, element: _PlyElement, pos: int, count: int) -> np.ndarray:
-    """(count, number of lists) list lengths, read record by record (the only way through them)."""
+    """(count, number of lists) list lengths, read record by record (the only way through them, but
+    for ASCII records one per line)."""
+    by_lines = body.line_list_lengths(element, pos, count)
+    if by_lines is not None:
+        return by_lines
     if not any(prop.length_type for prop in element.properties):  # fixed size: no walk needed
         size = sum(body.width(prop.type) for prop in element.properties)
         if size * count > body.end - pos:
@@ -405,11 +429,43 @@ def _ragged_positions(starts: np.ndarray, lengths: np.ndarray, step: int) -> np.
     return np.repeat(starts, lengths) + within * step
 
 
-class _AsciiPlyBody:
-    """ASCII PLY data as one token stream (records may wrap lines, as rply allows)."""
+_WHITESPACE = np.zeros(256, bool)
+_WHITESPACE[list(b" \t\n\r\x0b\x0c")] = True  # what bytes.split() splits on
 
-    def __init__(self, tokens: list[bytes], label: str):
-        self.tokens, self.label, self.end = tokens, label, len(tokens)
+
+class _AsciiPlyBody:
+    """ASCII PLY data as one token stream (records may wrap lines, as rply allows).
+
+    Tokens are located with numpy and a run of them is parsed as numbers at once (``numbers``); their
+    text is split out only when one is not a number, to name it.  Where every record of an element
+    with one list is one line, the usual layout, its list lengths are read from the lines' lengths
+    at once instead of record by record (a Cyberware range_grid has 200k records).
+    """
+
+    def __init__(self, body: bytes, label: str):
+        self.body, self.label = body, label
+        self.raw = np.frombuffer(body, np.uint8)
+        edges = np.diff(np.concatenate([[1], _WHITESPACE[self.raw], [1]]).astype(np.int8))
+        self.starts, self.ends = np.flatnonzero(edges == -1), np.flatnonzero(edges == 1)  # each token's bytes
+        self.end = len(self.starts)
+        self._by_lines = {}
+
+    @cached_property
+    def tokens(self) -> list[bytes]:
+        return self.body.split()
+
+    @cached_property
+    def _line_firsts(self) -> np.ndarray:
+        """The index of each token that is the first on its line."""
+        newlines = np.cumsum(self.raw == 10, dtype=np.int64)
+        after_newline = newlines[self.starts[1:] - 1] > newlines[self.ends[:-1] - 1]
+        return np.flatnonzero(np.r_[True, after_newline])
+
+    def numbers(self, pos: int, end: int) -> np.ndarray | None:
+        """Tokens ``pos`` to ``end`` as float64, parsed at once; None when one is not a number."""
+        if end <= pos:
+            return np.zeros(0)
+        return _numbers(self.body[self.starts[pos]:self.ends[end - 1]], end - pos)
 
     @staticmethod
     def width(_type: str) -> int:
@@ -421,13 +477,51 @@ class _AsciiPlyBody:
             raise InputError(f"{self.label}: list length {token.decode('latin-1')!r} is not a whole number")
         return int(token)
 
+    def line_list_lengths(self, element, pos: int, count: int) -> np.ndarray | None:
+        """(count, 1) list lengths of an element with one list whose ``count`` records from token ``pos``
+        are one line each (each line as long as its list length, written plainly, says), or None
+        when they are not: then the records are walked one by one."""
+        key = (element.name, pos, count)
+        if key not in self._by_lines:
+            self._by_lines[key] = self._line_list_lengths(element, pos, count)
+        return self._by_lines[key]
+
+    def _line_list_lengths(self, element, pos: int, count: int) -> np.ndarray | None:
+        columns = list(_with_list_columns(element))
+        listed = [i for i, (_, column) in enumerate(columns) if column is not None]
+        if len(listed) != 1 or count == 0:
+            return None
+        firsts = self._line_firsts
+        k = int(np.searchsorted(firsts, pos))
+        if k + count > len(firsts) or firsts[k] != pos:
+            return None
+        starts = firsts[k:k + count]
+        lengths = np.append(firsts[k + 1:k + count], firsts[k + count] if k + count < len(firsts) else self.end)
+        lengths -= starts + len(columns)
+        at = starts + listed[0]
+        short = lengths < 10
+        if (lengths < 0).any() or not np.array_equal(self.raw[self.starts[at[short]]], 48 + lengths[short]) \
+                or not (self.ends[at[short]] - self.starts[at[short]] == 1).all():
+            return None
+        for token, length in zip(at[~short].tolist(), lengths[~short].tolist()):
+            if self.body[self.starts[token]:self.ends[token]] != str(length).encode():
+                return None
+        return lengths[:, None]
+
     def fixed_records(self, element, pos, first_lengths, keep):
         width = sum(1 if column is None else 1 + first_lengths[column]
                     for _, column in _with_list_columns(element))
         end = pos + element.count * width
         if end > self.end:
             return None
-        table = np.array(self.tokens[pos:end]).reshape(element.count, width)
+        if first_lengths.size:  # one length for all records?  The lines may tell without parsing them.
+            by_lines = self.line_list_lengths(element, pos, element.count)
+            if by_lines is not None and not (by_lines == first_lengths).all():
+                return None
+            if by_lines is not None and not keep:
+                return None, end
+        table = self.numbers(pos, end)
+        table = (np.array(self.tokens[pos:end]) if table is None else table).reshape(element.count, width)
         values, column_start = {}, 0
         for prop, column in _with_list_columns(element):
             if column is None:
@@ -449,7 +543,8 @@ class _AsciiPlyBody:
         offsets, end = _record_offsets(self, element, pos, lengths)
         if not keep:
             return None, end
-        tokens = np.array(self.tokens[pos:end])
+        tokens = self.numbers(pos, end)
+        tokens = np.array(self.tokens[pos:end]) if tokens is None else tokens
         values = {}
         for prop, column in _with_list_columns(element):
             where = offsets[prop.name] - pos
@@ -469,6 +564,10 @@ class _BinaryPlyBody:
     @staticmethod
     def width(type_code: str) -> int:
         return int(type_code[1])
+
+    @staticmethod
+    def line_list_lengths(element, pos: int, count: int) -> None:
+        return None  # binary records have no lines
 
     def length_at(self, pos: int, type_code: str) -> int:
         (value,) = struct.unpack_from(self.byte_order + _STRUCT_CODES[type_code], self.data, pos)
@@ -702,6 +801,93 @@ def _lzf_decompress(block: bytes, expected: int, label: str) -> bytes:
     if pos != len(block) or len(out) != expected:
         raise InputError(f"{label}: the binary_compressed (LZF) data is corrupt")
     return bytes(out)
+
+
+# --- large scans: thinned while they are read -------------------------------------------------
+
+# A scan with more points than this is thinned on reading by the commands (a few million points fix a
+# pose as well as tens of millions, and memory stays bounded); thinning aims at half of it.
+LARGE_SCAN_POINTS = 6_000_000
+THIN_CHUNK = 1 << 20  # records read at a time
+_KEY_BITS = 21  # voxel index bits per axis
+
+
+def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
+    """A binary PLY holding only vertices, more than ``max_points`` of them, read in chunks of
+    THIN_CHUNK records and thinned as it is read: one point per voxel (the first in the file, a real
+    measurement with its normal), the voxel grown by sqrt(2) whenever more than max_points / 2 are
+    kept, so memory stays bounded whatever the file holds.  None for any other file (read whole as
+    usual).  The counts are checked both ways as for any PLY."""
+    if checked_input(path).stat().st_size < max_points * 12:  # under max_points vertices of 3 floats
+        return None
+    with open(path, "rb") as fh:
+        header = _ply_header(fh.read(_MAX_HEADER_BYTES), label)
+        (vertex, *others) = header.elements
+        names = [p.name for p in vertex.properties]
+        if (header.byte_order is None or others or vertex.name != "vertex" or vertex.count <= max_points
+                or any(p.length_type for p in vertex.properties) or not {"x", "y", "z"} <= set(names)):
+            return None  # (the whole-file reader names what is missing or wrong)
+        record = np.dtype([(p.name, header.byte_order + p.type) for p in vertex.properties])
+        size = os.fstat(fh.fileno()).st_size
+        end = header.body_start + vertex.count * record.itemsize
+        if size < end:
+            raise _truncated(label, vertex.count, "vertices", (size - header.body_start) // record.itemsize)
+        fh.seek(end)
+        if fh.read(3) not in (b"", b"\n", b"\r\n"):
+            raise _trailing(label, f"byte {end} ({size - end} bytes more)", vertex.count, "vertices")
+        fh.seek(header.body_start)
+        columns = ["x", "y", "z"] + (["nx", "ny", "nz"] if {"nx", "ny", "nz"} <= set(names) else [])
+        grid, parts, count, dropped = None, [], 0, 0
+        for start in range(0, vertex.count, THIN_CHUNK):
+            chunk = np.fromfile(fh, record, min(THIN_CHUNK, vertex.count - start))
+            values = np.column_stack([chunk[name] for name in columns]).astype(np.float64)
+            del chunk
+            finite = np.isfinite(values).all(axis=1)
+            dropped += len(values) - int(finite.sum())
+            values, index = values[finite], start + np.flatnonzero(finite)
+            if grid is None and len(values) >= 100:
+                grid = _ThinningGrid(values[:, :3], vertex.count, max_points // 2)
+            if grid is not None:
+                values, index = grid.first_per_voxel(values, index)
+            parts.append((values, index))
+            count += len(index)
+            if grid is not None and count > max_points // 2:  # voxels met in several chunks counted once,
+                values, index = grid.first_per_voxel(*(np.concatenate(part) for part in zip(*parts)))
+                while len(index) > max_points // 2:  # and while too many are kept, a coarser grid for all
+                    grid.voxel *= np.sqrt(2.0)
+                    values, index = grid.first_per_voxel(values, index)
+                parts, count = [(values, index)], len(index)
+    values, index = (np.concatenate(part) for part in zip(*parts))
+    if grid is not None:
+        values, index = grid.first_per_voxel(values, index)  # a voxel met in several chunks: its first point
+    warnings = [f"{label}: {vertex.count:,} points, more than the {max_points:,} read whole: thinned while "
+                f"reading to {len(index):,}, one point kept per voxel of "
+                f"{grid.voxel if grid is not None else 0:.3g} (the file's units)"]
+    if dropped:
+        warnings.append(f"{label}: ignored {dropped} points with NaN or infinite coordinates")
+    return _Parsed(values[:, :3], values[:, 3:] if values.shape[1] == 6 else None, None, header.units,
+                   tuple(warnings), None if header.viewpoint is None else header.viewpoint[None])
+
+
+class _ThinningGrid:
+    """Voxels fixed to the first chunk's corner, sized so that a surface sampled like that chunk keeps
+    about ``target`` points of ``total`` (points on a surface thin as the square of the voxel)."""
+
+    def __init__(self, points: np.ndarray, total: int, target: int):
+        from .pointops import median_spacing
+
+        self.corner = points.min(axis=0)
+        self.voxel = max(median_spacing(points) * np.sqrt(total / target), 1e-9)
+
+    def first_per_voxel(self, values: np.ndarray, index: np.ndarray):
+        """(values, file indices) of the first point (in file order: ``index`` ascends) in each voxel;
+        points beyond the grid's reach (stray points far away) are all kept."""
+        cells = np.floor((values[:, :3] - self.corner) / self.voxel) + (1 << (_KEY_BITS - 1))
+        inside = ((cells >= 0) & (cells < 1 << _KEY_BITS)).all(axis=1)
+        cells = np.where(inside[:, None], cells, 0).astype(np.int64)
+        keys = np.where(inside, (cells[:, 0] << 2 * _KEY_BITS) | (cells[:, 1] << _KEY_BITS) | cells[:, 2], -1 - index)
+        first = np.sort(np.unique(keys, return_index=True)[1])
+        return values[first], index[first]
 
 
 # --- text point clouds --------------------------------------------------------------------------

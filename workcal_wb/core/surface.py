@@ -25,13 +25,40 @@ from .geometry import Cloud, shape_kind
 SAMPLES_PER_DIAGONAL = 250
 # A cell grid never has more cells than this (4 bytes each); its cell grows instead.
 MAX_GRID_CELLS = 16_000_000
-_UNKNOWN, _FAR = -2, -1
+# A cell's stored value: 0 not yet looked up, -1 no sample within the bound, else sample index + 1.
+# Zero for "unknown" lets a grid start as np.zeros: pages of cells never looked up cost no memory.
+_UNKNOWN, _FAR = 0, -1
+# Cells filled by one KD-tree query at most (bounds the temporary memory of a fill).
+FILL_CHUNK = 1 << 18
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
 # level doubles both, so a loose gate does not fill a fine grid far from the surface.
 GATE_CELLS = 16
 # A turn maps the model onto itself (a symmetry) when it moves its surface by less than this
 # fraction of the model diagonal (0.1 mm on a 100 mm part), plus three times the model's own noise.
 SYMMETRY_TOLERANCE_FRACTION = 1e-3
+
+
+class _Arrays:
+    """Arrays of a stored model, each taken once with its dtype and shape checked (None: any length)."""
+
+    def __init__(self, arrays: dict):
+        self.arrays, self.taken = arrays, set()
+
+    def __call__(self, name: str, dtype: str, shape: tuple) -> np.ndarray:
+        a = self.arrays[name]
+        if a.dtype != np.dtype(dtype) or a.ndim != len(shape) or any(
+                want is not None and have != want for have, want in zip(a.shape, shape)):
+            raise ValueError(f"{name}: {a.dtype}{a.shape}, not {dtype}{shape}")
+        self.taken.add(name)
+        return a
+
+    def unused(self) -> set:
+        return set(self.arrays) - self.taken
+
+
+# The parts of a stored grid: (name, dtype, shape).
+_GRID_PARTS = (("lo", "f8", (3,)), ("dims", "i8", (3,)), ("size", "f8", (2,)), ("complete", "?", ()),
+               ("cells", "i8", (None,)), ("values", "i4", (None,)))
 
 
 class NearestGrid:
@@ -43,53 +70,89 @@ class NearestGrid:
     query that is never repeated: an iterative fit keeps its points in nearly the same cells, so
     after the first iteration almost every lookup is a hit.  The cell's sample is at most half a
     cell diagonal from the point's own nearest sample, which at a cell of the sample spacing changes
-    a point-to-plane residual by a second-order amount (curvature x offset^2).
+    a point-to-plane residual by a second-order amount (curvature x offset^2).  A cell holds the
+    same sample however and whenever it was filled, so a grid kept from an earlier run (the model
+    cache) gives the same answers as a fresh one.
     """
 
-    def __init__(self, points: np.ndarray, tree: cKDTree, cell: float, bound: float):
+    def __init__(self, lo: np.ndarray, dims: np.ndarray, cell: float, bound: float, tree,
+                 index: np.ndarray | None = None, complete: bool = False):
+        self.lo, self.dims, self.cell, self.bound = lo, dims, cell, bound
+        self._tree = tree  # a function that returns the samples' KD-tree (built when a cell is first filled)
+        self.index = np.zeros(int(np.prod(dims)), np.int32) if index is None else index
+        self.complete = complete  # every cell filled (precompute)
+        self.filled = 0  # cells filled by lookups and precompute since the grid was made or loaded
+
+    @classmethod
+    def around(cls, points: np.ndarray, tree, cell: float, bound: float) -> "NearestGrid":
+        """A grid over ``points`` and ``bound`` mm around them (no cell filled yet)."""
         lo, hi = points.min(axis=0) - bound - cell, points.max(axis=0) + bound + cell
         cell = max(cell, float(np.prod(hi - lo) / MAX_GRID_CELLS) ** (1 / 3))
-        self.lo, self.cell, self.bound, self.tree = lo, cell, bound, tree
-        self.dims = np.ceil((hi - lo) / cell).astype(np.int64) + 1
-        self.index = np.full(int(np.prod(self.dims)), _UNKNOWN, np.int32)
-        self.complete = False  # every cell filled (precompute)
+        return cls(lo, np.ceil((hi - lo) / cell).astype(np.int64) + 1, cell, bound, tree)
 
     def _cells(self, points: np.ndarray):
         c = np.floor((points - self.lo) / self.cell).astype(np.int64)
-        inside = np.all((c >= 0) & (c < self.dims), axis=1)
+        unsigned = c.view(np.uint64)  # a negative index becomes huge: one comparison per axis tests both ends
+        inside = (unsigned[:, 0] < self.dims[0]) & (unsigned[:, 1] < self.dims[1]) & (unsigned[:, 2] < self.dims[2])
         return (c[:, 0] * self.dims[1] + c[:, 1]) * self.dims[2] + c[:, 2], inside
 
     def _fill(self, cells: np.ndarray) -> None:
         cells = np.unique(cells)
-        ijk = np.column_stack(np.unravel_index(cells, tuple(self.dims)))
-        d, j = self.tree.query(self.lo + (ijk + 0.5) * self.cell, distance_upper_bound=self.bound,
-                               workers=-1 if len(cells) > 10000 else 1)
-        self.index[cells] = np.where(np.isfinite(d), j, _FAR)
+        tree = self._tree()
+        for start in range(0, len(cells), FILL_CHUNK):
+            part = cells[start:start + FILL_CHUNK]
+            ijk = np.column_stack(np.unravel_index(part, tuple(self.dims)))
+            d, j = tree.query(self.lo + (ijk + 0.5) * self.cell, distance_upper_bound=self.bound,
+                              workers=-1 if len(part) > 10000 else 1)
+            self.index[part] = np.where(np.isfinite(d), j + 1, _FAR)
+        self.filled += len(cells)
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Sample index per point, -1 where no sample lies within the bound of its cell."""
         cells, inside = self._cells(points)
         cells = np.where(inside, cells, 0)
-        idx = self.index[cells]
-        unknown = (idx == _UNKNOWN) & inside
+        stored = self.index[cells]
+        unknown = (stored == _UNKNOWN) & inside
         if unknown.any():
             self._fill(cells[unknown])
-            idx = self.index[cells]
-        return np.where(inside, idx, _FAR)
+            stored = self.index[cells]
+        return np.where(inside & (stored > 0), stored - 1, -1)
 
     def precompute(self) -> None:
         """Fill every cell now: those within the bound of a sample by query, the rest as "none"."""
         if self.complete:
             return
         occupied = np.zeros(tuple(self.dims), bool)
-        c = np.floor((self.tree.data - self.lo) / self.cell).astype(np.int64)
+        c = np.floor((self._tree().data - self.lo) / self.cell).astype(np.int64)
         occupied[c[:, 0], c[:, 1], c[:, 2]] = True
         from scipy.ndimage import binary_dilation
 
         near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1).ravel()
+        del occupied
         self._fill(np.flatnonzero(near & (self.index == _UNKNOWN)))
-        self.index[~near] = _FAR
+        self.index[~near & (self.index == _UNKNOWN)] = _FAR
         self.complete = True
+
+    def state(self) -> dict:
+        """The grid as plain arrays (its geometry and the cells filled so far), for the model cache."""
+        cells = np.flatnonzero(self.index)
+        return {"lo": self.lo, "dims": self.dims, "size": np.array([self.cell, self.bound]),
+                "complete": np.array(self.complete), "cells": cells, "values": self.index[cells]}
+
+    @classmethod
+    def from_state(cls, state: dict, tree, samples: int) -> "NearestGrid":
+        """The grid ``state`` describes; ValueError when it cannot be one for ``samples`` samples."""
+        dims, cells, values = state["dims"], state["cells"], state["values"]
+        total = int(np.prod(dims)) if dims.shape == (3,) and (dims > 0).all() else 0
+        if not (0 < total <= 2 * MAX_GRID_CELLS and state["lo"].shape == (3,) and state["size"].shape == (2,)
+                and cells.shape == values.shape and cells.ndim == 1
+                and (len(cells) == 0 or (cells.min() >= 0 and cells.max() < total
+                                         and values.min() >= _FAR and values.max() <= samples))):
+            raise ValueError("a nearest-sample grid that does not fit the model")
+        index = np.zeros(total, np.int32)
+        index[cells] = values
+        return cls(state["lo"], dims, float(state["size"][0]), float(state["size"][1]), tree, index,
+                   bool(state["complete"]))
 
 
 class SurfaceModel:
@@ -127,7 +190,7 @@ class SurfaceModel:
                 normals = pointops.orient_outward(points, pointops.estimate_normals(points, 3 * spacing))
             weights = np.ones(len(points))
         self.points, self.normals, self.spacing = points, normals, spacing
-        self.tree = cKDTree(points)
+        self.warnings = list(model.warnings)
         self.vertices = model.points
         self.triangles = model.triangles
         rng = np.random.default_rng(seed)
@@ -143,8 +206,15 @@ class SurfaceModel:
         self.symmetry_axes, self.symmetry_points = found["axes"], found["points"]
         self.symmetry_orders, self.symmetry_deviations_mm = found["orders"], found["deviations_mm"]
         self.flips = found["flips"]
-        self._coarse = {}
-        self._grids: dict[int, NearestGrid] = {}
+        self._features: dict[float, tuple] = {}  # voxel -> coarse points, normals, FPFH
+        self._occupied: dict[float, np.ndarray] = {}  # cell size -> keys of the cells the surface passes through
+        self._grids: dict[int, NearestGrid] = {}  # level -> the nearest-sample grid for its gates
+        self._custom_grids: dict[tuple, NearestGrid] = {}  # (cell, bound) -> a grid of its own
+
+    @cached_property
+    def tree(self) -> cKDTree:
+        """KD-tree of the samples (built when first needed: a model from the cache may never need it)."""
+        return cKDTree(self.points)
 
     def symmetries(self) -> list[str]:
         """The model's symmetries in words (model frame), e.g. "turning the part 90 degrees about its
@@ -178,7 +248,7 @@ class SurfaceModel:
         idx = self.grid_level(level).lookup(points)
         found = idx >= 0
         idx = np.where(found, idx, 0)
-        d = np.linalg.norm(points - self.points[idx], axis=1)
+        d = pointops.lengths(points - self.points[idx])
         found &= d <= gate
         return d, idx, found
 
@@ -186,16 +256,16 @@ class SurfaceModel:
         """The cell grid for gates up to GATE_CELLS x 2^level sample spacings (cached)."""
         if level not in self._grids:
             cell = self.spacing * 2**level
-            self._grids[level] = NearestGrid(self.points, self.tree, cell, GATE_CELLS * cell)
+            self._grids[level] = NearestGrid.around(self.points, self._tree, cell, GATE_CELLS * cell)
         return self._grids[level]
 
     def grid(self, cell: float, bound: float) -> NearestGrid:
         """A cell grid of its own cell size and bound (cached), e.g. for a method that fills it
         ahead of time."""
-        key = ("grid", round(cell, 9), round(bound, 9))
-        if key not in self._coarse:
-            self._coarse[key] = NearestGrid(self.points, self.tree, cell, bound)
-        return self._coarse[key]
+        key = (round(cell, 9), round(bound, 9))
+        if key not in self._custom_grids:
+            self._custom_grids[key] = NearestGrid.around(self.points, self._tree, cell, bound)
+        return self._custom_grids[key]
 
     def plane_residuals(self, points: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Signed distance of each point to the tangent plane of its sample (positive outside)."""
@@ -210,15 +280,15 @@ class SurfaceModel:
 
     def occupied_cells(self, cell: float) -> np.ndarray:
         """Sorted keys of the grid cells the model surface passes through (cached per cell size)."""
-        key = ("cells", round(cell, 9))
-        if key not in self._coarse:
-            self._coarse[key] = np.unique(self.cell_keys(self.points, cell))
-        return self._coarse[key]
+        key = round(cell, 9)
+        if key not in self._occupied:
+            self._occupied[key] = np.unique(self.cell_keys(self.points, cell))
+        return self._occupied[key]
 
     def coarse(self, voxel: float):
         """(points, normals, FPFH features) of the model on a ``voxel`` grid, for global search."""
         key = round(voxel, 9)
-        if key not in self._coarse:
+        if key not in self._features:
             from .features import fpfh
 
             from .global_search import FEATURE_RADIUS, NORMAL_NEIGHBOURS
@@ -227,8 +297,82 @@ class SurfaceModel:
             normals = pointops.pca_normals(centroids, NORMAL_NEIGHBOURS)  # as the scan's are estimated
             # Orient like the surface: PCA gives the plane, the samples' normals give the side.
             normals[np.einsum("ij,ij->i", normals, self.normals[rep]) < 0] *= -1
-            self._coarse[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
-        return self._coarse[key]
+            self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
+        return self._features[key]
+
+    def _tree(self) -> cKDTree:
+        return self.tree
+
+    # -- as plain data, for the model cache (model_cache.py) ---------------------------------------
+
+    def state(self) -> tuple[dict, dict]:
+        """(numbers and words, arrays): the model as built so far, everything a match reuses: samples,
+        normals, mesh, view order, symmetries, and the features, occupied cells and nearest-sample
+        grids computed until now.  ``from_state`` makes the same model from it."""
+        meta = {"name": self.name, "warnings": list(self.warnings), "diagonal": self.diagonal,
+                "is_mesh": self.is_mesh, "spacing": self.spacing, "noise_mm": self.noise_mm,
+                "symmetry_tolerance_mm": self.symmetry_tolerance_mm, "features": list(self._features),
+                "occupied": list(self._occupied), "grids": list(self._grids),
+                "custom_grids": [list(key) for key in self._custom_grids]}
+        arrays = {"points": self.points, "normals": self.normals, "vertices": self.vertices,
+                  "view_order": self.view_order, "symmetry_axes": self.symmetry_axes,
+                  "symmetry_points": self.symmetry_points, "symmetry_orders": self.symmetry_orders,
+                  "symmetry_deviations_mm": self.symmetry_deviations_mm, "flips": self.flips}
+        if self.is_mesh:
+            arrays.update(triangles=self.triangles, face_normals=self.face_normals)
+        for i, value in enumerate(self._features.values()):
+            arrays.update({f"features.{i}.{part}": a for part, a in zip(("points", "normals", "fpfh"), value)})
+        arrays.update({f"occupied.{i}": keys for i, keys in enumerate(self._occupied.values())})
+        for prefix, grids in (("grid", self._grids), ("custom", self._custom_grids)):
+            for i, grid in enumerate(grids.values()):
+                arrays.update({f"{prefix}.{i}.{part}": a for part, a in grid.state().items()})
+        return meta, arrays
+
+    @classmethod
+    def from_state(cls, meta: dict, arrays: dict) -> "SurfaceModel":
+        """The model ``state`` gave; ValueError (or KeyError, TypeError) when the data cannot be one."""
+        self = cls.__new__(cls)
+        for key, kind in (("name", str), ("diagonal", float), ("is_mesh", bool), ("spacing", float),
+                          ("noise_mm", float), ("symmetry_tolerance_mm", float)):
+            if not isinstance(meta[key], kind) and not (kind is float and isinstance(meta[key], int)):
+                raise ValueError(f"{key} is not a {kind.__name__}")
+            setattr(self, key, kind(meta[key]))
+        self.warnings = [str(w) for w in meta["warnings"]]
+        n = len(arrays["points"])
+        take = _Arrays(arrays)
+        self.points, self.normals = take("points", "f8", (n, 3)), take("normals", "f8", (n, 3))
+        self.view_order = take("view_order", "i8", (n,))
+        self.vertices = take("vertices", "f8", (None, 3))
+        self.triangles = self.face_normals = None
+        if self.is_mesh:
+            self.triangles = take("triangles", "i8", (None, 3))
+            self.face_normals = take("face_normals", "f8", (len(self.triangles), 3))
+            if len(self.triangles) and not (0 <= self.triangles.min() and self.triangles.max() < len(self.vertices)):
+                raise ValueError("faces refer to vertices that do not exist")
+        k = len(arrays["symmetry_orders"])
+        self.symmetry_axes, self.symmetry_points = take("symmetry_axes", "f8", (k, 3)), take("symmetry_points", "f8", (k, 3))
+        self.symmetry_orders = take("symmetry_orders", "i8", (k,))
+        self.symmetry_deviations_mm = take("symmetry_deviations_mm", "f8", (k,))
+        self.flips = take("flips", "f8", (None, 4, 4))
+        if n < 3 or not (np.isfinite(self.points).all() and (0 <= self.view_order).all() and (self.view_order < n).all()):
+            raise ValueError("samples that are not finite, or a view order outside them")
+        self._features = {}
+        for i, voxel in enumerate(meta["features"]):
+            m = len(arrays[f"features.{i}.points"])
+            self._features[float(voxel)] = (take(f"features.{i}.points", "f8", (m, 3)),
+                                            take(f"features.{i}.normals", "f8", (m, 3)),
+                                            take(f"features.{i}.fpfh", "f8", (m, 33)))
+        self._occupied = {float(cell): take(f"occupied.{i}", "i8", (None,)) for i, cell in enumerate(meta["occupied"])}
+        self._grids, self._custom_grids = {}, {}
+        for prefix, keys, grids in (("grid", [int(level) for level in meta["grids"]], self._grids),
+                                    ("custom", [tuple(float(v) for v in key) for key in meta["custom_grids"]],
+                                     self._custom_grids)):
+            for i, key in enumerate(keys):
+                part = {name: take(f"{prefix}.{i}.{name}", dtype, shape) for name, dtype, shape in _GRID_PARTS}
+                grids[key] = NearestGrid.from_state(part, self._tree, n)
+        if take.unused():
+            raise ValueError(f"unknown data {sorted(take.unused())[:3]}")
+        return self
 
     @cached_property
     def _bvh(self):

@@ -12,6 +12,8 @@ PLAUSIBLE_EXTENT_MM = (1.0, 20000.0)
 # The size of a cloud is that of its bulk (the box from the 1st to the 99th percentile); a point
 # farther than this many bulk sizes from the bulk's centre is a stray point, not a sign of a unit.
 STRAY_DISTANCE = 10.0
+# The bulk of a cloud is measured on at most about this many of its points.
+BULK_SAMPLE = 1_000_000
 
 
 def mm_per_unit(units: str) -> float:
@@ -28,11 +30,13 @@ def extent_warnings(points: np.ndarray, name: str, units: str, unit_option: str 
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     if len(points) < 2:
         return []
-    low_corner, high_corner = np.percentile(points, [1, 99], axis=0)
+    sample = points[::-(-len(points) // BULK_SAMPLE)]  # every k-th point: the bulk of millions is that of a million
+    low_corner, high_corner = np.percentile(sample, [1, 99], axis=0)
     bulk = float(np.linalg.norm(high_corner - low_corner))
     warnings = []
     with np.errstate(over="ignore", invalid="ignore"):
-        distance = np.linalg.norm(points - np.median(points, axis=0), axis=1)
+        offset = points - np.median(sample, axis=0)
+        distance = np.sqrt(offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1] + offset[:, 2] * offset[:, 2])
     stray = distance > STRAY_DISTANCE * max(bulk, 1e-9)
     if stray.any():
         warnings.append(f"{name}: {int(stray.sum())} of {len(points)} points lie far from all the others (up to "

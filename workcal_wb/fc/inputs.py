@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.model_cache import ModelCache
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.fc import prefs
 from workcal_wb.fc.memo import LastResult
@@ -38,6 +40,7 @@ class Inputs:
     regions: dict | None = None
     toolpath_points: np.ndarray | None = None
     labels: dict = field(default_factory=dict)
+    model_cache: Path | None = None  # where prepared models are kept (prefs.model_cache_folder); None: nowhere
 
     def key(self) -> str:
         """Fingerprint of the data and options: equal keys give the same calibration (the BLAS thread
@@ -104,7 +107,8 @@ def gather_inputs(scan, workpiece, reference, *, options: CalibrationOptions | N
     points = None if toolpath is None else toolpath_points(toolpath)
     labels = {"scan": label(scan), "workpiece": label(workpiece), "reference": label(reference),
               "toolpath": "" if toolpath is None else source_label(toolpath)}
-    return Inputs(scan_points, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels)
+    return Inputs(scan_points, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels,
+                  prefs.model_cache_folder())
 
 
 _last = LastResult()
@@ -115,12 +119,18 @@ def run(inputs: Inputs, progress=None, blas_threads: int | None = 1) -> Calibrat
 
     ``progress(fraction, message)`` may raise errors.Cancelled to stop; the exception propagates.
     ``blas_threads``: None from a worker thread inside FreeCAD (its GUI thread goes on using numpy).
-    The last result is remembered by the inputs' fingerprint."""
+    The last result is remembered by the inputs' fingerprint; the models are prepared once and kept in
+    ``inputs.model_cache`` for later calibrations (also after a restart), and a folder that cannot be
+    written is a warning of the result."""
     key = inputs.key()
     result = _last.get(key)
     if result is None:
-        result = calibrate(inputs.scan, inputs.workpiece, inputs.reference, regions=inputs.regions,
+        cache = ModelCache(inputs.model_cache)
+        workpiece, reference = (cache.model(m, inputs.options.seed) for m in (inputs.workpiece, inputs.reference))
+        result = calibrate(inputs.scan, workpiece, reference, regions=inputs.regions,
                            toolpath_points=inputs.toolpath_points,
                            options=replace(inputs.options, blas_threads=blas_threads), progress=progress)
+        cache.store()
+        result.warnings += cache.notes
         _last.put(key, result)
     return result

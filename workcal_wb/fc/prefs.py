@@ -5,6 +5,8 @@ calibration or export starts with.  Works headless too (freecadcmd has the same 
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import FreeCAD
 
 from workcal_wb.core.match import METHODS
@@ -29,6 +31,9 @@ DEFAULTS = {
     "DeviationRangeMm": ("float", 0.0),  # 0 = from the data
     "ReportDir": ("string", ""),  # "" = a folder beside the document (or the temp folder)
     "PickVisibleOnly": ("int", 1),  # box and lasso picks take only the points not hidden by others
+    # Prepared models kept between calibrations (core/model_cache.py): 0 prepares them anew every time.
+    "KeepPreparedModels": ("int", 1),
+    "ModelCacheDir": ("string", ""),  # "" = the user's cache folder (as the command line's default)
 }
 
 
@@ -59,6 +64,16 @@ def get(name: str):
     elif name == "Resamples" and value < 1:
         value = default
     return value
+
+
+def model_cache_folder() -> Path | None:
+    """Where calibrations keep prepared models, as the preferences say; None when they keep none."""
+    from workcal_wb.core.model_cache import default_folder
+
+    if not get("KeepPreparedModels"):
+        return None
+    folder = get("ModelCacheDir").strip()
+    return Path(folder).expanduser() if folder else default_folder()
 
 
 def set(name: str, value) -> None:  # noqa: A001  (mirrors get)

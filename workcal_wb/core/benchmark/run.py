@@ -155,19 +155,12 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
         only: str | None = None) -> Report:
     """Run both methods (alternating, ``rounds`` times each) and the verdicts, write the Markdown to
     ``out``; with ``only="verdicts"`` run just the verdicts and replace that section of ``out``."""
-    if only == "verdicts":
-        section, missed = _verdicts(shared, seed, quick, log)
+    if only is not None:
+        section, missed = {"verdicts": lambda: _verdicts(shared, seed, quick, log),
+                           "scenes": lambda: _scenes(shared, seed, log),
+                           "processes": lambda: _processes(shared, seed, quick, log)}[only]()
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
-        kept = previous.split(VERDICTS_HEADING)[0].rstrip("\n")
-        scenes = previous.split(SCENES_HEADING, 1)[1] if SCENES_HEADING in previous else ""
-        atomic_write_text(out, (kept + "\n\n" if kept else "") + section
-                          + ("\n" + SCENES_HEADING + scenes if scenes else ""))
-        return Report(section, missed)
-    if only == "scenes":
-        section, missed = _scenes(shared, seed, log)
-        previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
-        kept = previous.split(SCENES_HEADING)[0].rstrip("\n")
-        atomic_write_text(out, (kept + "\n\n" if kept else "") + section)
+        atomic_write_text(out, _with_section(previous, section))
         return Report(section, missed)
     rounds = 1 if quick else 2
     per_method = {m: ([], 0.0) for m in METHODS}
@@ -196,8 +189,8 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
     note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
                                               "the bunny cases were skipped.")
     report = _table(per_method, large, seed, quick, rounds, note, gcode)
-    section, missed = _verdicts(shared, seed, quick, log)
-    report = Report(report.text + "\n" + section, report.missed + missed)
+    for section, missed in (_processes(shared, seed, quick, log), _verdicts(shared, seed, quick, log)):
+        report = Report(report.text + "\n" + section, report.missed + missed)
     if not quick:
         section, missed = _scenes(shared, seed, log)
         report = Report(report.text + "\n" + section, report.missed + missed)
@@ -206,6 +199,33 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
 
 
 VERDICTS_HEADING = "## Verdicts"
+PROCESSES_HEADING = "## Whole processes"
+SCENES_HEADING = "## Scenes"
+SECTIONS = (PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING)  # after the match table, in this order
+
+
+def _with_section(previous: str, section: str) -> str:
+    """``previous`` (a benchmarks page) with ``section`` (one of SECTIONS, by its heading line) put in
+    place of its old version, or added where it belongs; the other parts are kept as they were."""
+    import re
+
+    starts = sorted((m.start(), h) for h in SECTIONS for m in [re.search(rf"^{re.escape(h)}$", previous, re.M)] if m)
+    parts = {None: previous[:starts[0][0]] if starts else previous}
+    for (at, heading), (end, _) in zip(starts, starts[1:] + [(len(previous), None)]):
+        parts[heading] = previous[at:end]
+    parts[section.split("\n", 1)[0]] = section
+    ordered = [parts[None]] + [parts[h] for h in SECTIONS if h in parts]
+    return "\n\n".join(p.strip("\n") for p in ordered if p.strip()) + "\n"
+
+
+def _processes(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
+    """The whole-process section (see processes.py) and the targets it missed; its files in a temporary
+    folder."""
+    from . import processes
+
+    log("benchmark: whole processes ...")
+    with tempfile.TemporaryDirectory() as folder:
+        return processes.run(bunny_folder(shared), seed, quick, Path(folder), log)
 
 
 def _verdicts(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
@@ -219,9 +239,6 @@ def _verdicts(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, li
     section, _ = verdicts.table(rows, seed)
     wrong_ok, _ = verdicts.goals(rows)
     return section, [f"verdicts: {len(wrong_ok)} wrong pose(s) reported ok"] if wrong_ok else []
-
-
-SCENES_HEADING = "## Scenes"
 
 
 def _scenes(shared: Path | None, seed: int, log) -> tuple[str, list]:

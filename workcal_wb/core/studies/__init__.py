@@ -22,8 +22,9 @@ __all__ = ["STUDIES", "StudyResult", "StudySettings", "summary_lines", "run_stud
 
 
 def run_study(name: str, out_dir=None, *, settings: StudySettings = StudySettings(), n=None, positions=None,
-              arc_deg=None, progress=None) -> StudyResult:
-    """Run one study by name; ``n``, ``positions`` and ``arc_deg`` go to the studies that take them."""
+              arc_deg=None, progress=None, runner=None) -> StudyResult:
+    """Run one study by name; ``n``, ``positions`` and ``arc_deg`` go to the studies that take them,
+    ``runner`` (parallel.Runner) says where its calibrations run (default: here, one after the other)."""
     from ..errors import InputError
 
     if name not in STUDIES:
@@ -35,4 +36,4 @@ def run_study(name: str, out_dir=None, *, settings: StudySettings = StudySetting
         kwargs["positions"] = positions
     if name == placement.NAME and arc_deg is not None:
         kwargs["arc_deg"] = arc_deg
-    return STUDIES[name].run(out_dir, settings=settings, progress=progress, **kwargs)
+    return STUDIES[name].run(out_dir, settings=settings, progress=progress, runner=runner, **kwargs)

@@ -9,6 +9,7 @@ numbers; a calibration that raised or failed keeps its row, with the reason, and
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import math
@@ -84,6 +85,26 @@ class Truth:
         rng = np.random.default_rng(seed)
         points = self.workpiece.points
         self.surface = points[rng.choice(len(points), min(SURFACE_SAMPLES, len(points)), replace=False)]
+
+
+@functools.lru_cache(maxsize=4)
+def prepared(workpiece: str, seed: int) -> tuple:
+    """(scene, Truth) of a study's workpiece, built once per process: a study's tasks share it, and a
+    worker of a pool inherits it or builds its own (the same, all is seeded)."""
+    from ..simulate.scene import build_scene
+
+    scene = build_scene(workpiece, seed=seed)
+    return scene, Truth(scene, seed)
+
+
+@functools.lru_cache(maxsize=2)
+def capture(workpiece: str, settings: StudySettings):
+    """The one capture of the default set-up that repeatability and point-count calibrate again and
+    again, made once per process."""
+    from ..simulate.scanner import Scanner
+
+    scene, _ = prepared(workpiece, settings.seed)
+    return Scanner.aimed_at(scene, seed=settings.seed, **settings.scanner_settings()).scan(scene)
 
 
 def calibrate_scan(scan, truth: Truth, settings: StudySettings, seed: int, keep=None):

@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..parallel import Runner
 from ..simulate.scanner import scanner_ring
-from ..simulate.scene import build_scene
-from .common import (StudyResult, StudySettings, Truth, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
-                     calibrate_scan, fmt, fraction, new_figure, pose_columns, score, spread, stat, target)
+from .common import (StudyResult, StudySettings, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
+                     calibrate_scan, fmt, fraction, new_figure, pose_columns, prepared, score, spread, stat, target)
 
 NAME = "object-size"
 TITLE = "Object size: 2 cm figurine against 25 cm car"
@@ -22,29 +22,23 @@ WORKPIECES = ("figurine", "car")
 
 
 def run(out_dir=None, *, positions: int | None = None, workpieces=WORKPIECES, settings: StudySettings = StudySettings(),
-        progress=None) -> StudyResult:
-    """Each workpiece calibrated from ``positions`` scanner placements (default 5, quick 2)."""
+        progress=None, runner=None) -> StudyResult:
+    """Each workpiece calibrated from ``positions`` scanner placements (default 5, quick 2); ``runner``:
+    where (parallel.Runner; default here, one after the other)."""
     k = positions if positions is not None else (2 if settings.quick else 5)
     if k < 1 or not workpieces:
         raise InputError(f"object-size: need at least one workpiece and one position, got {workpieces}, {k}")
     say = progress or (lambda message: None)
-    rows = []
+    tasks = []
     for workpiece in workpieces:
-        scene = build_scene(workpiece, seed=settings.seed)
-        truth = Truth(scene, settings.seed)
-        for i, scanner in enumerate(scanner_ring(scene, k, seed=settings.seed, **settings.scanner_settings()),
-                                    start=1):
-            scan = scanner.scan(scene)
-            result, error = calibrate_scan(scan, truth, settings, settings.seed + i)
-            row = {"workpiece": workpiece, "diagonal_mm": truth.diagonal, "position": i,
-                   "workpiece_points": int(scan.mask("workpiece").sum()),
-                   "reference_points": int(scan.mask("reference").sum()),
-                   **score(result, error, truth, scan), **pose_columns("W", None if result is None else result.W)}
-            row["relative_surface_error"] = (None if row["surface_error_mm"] is None
-                                             else row["surface_error_mm"] / truth.diagonal)
-            rows.append(row)
-            say(f"{NAME} {workpiece} {i}/{k}: {row['workpiece_points']} points, {row['status']}, rotation error "
-                f"{fmt(row['rotation_error_deg'])} deg, surface error {fmt(row['surface_error_mm'])} mm")
+        scene, _ = prepared(workpiece, settings.seed)
+        ring = scanner_ring(scene, k, seed=settings.seed, **settings.scanner_settings())
+        tasks += [(workpiece, settings, scanner, i) for i, scanner in enumerate(ring, start=1)]
+    rows = []
+    for row in (runner or Runner(workers=1)).map(_run, tasks):
+        rows.append(row)
+        say(f"{NAME} {row['workpiece']} {row['position']}/{k}: {row['workpiece_points']} points, {row['status']}, "
+            f"rotation error {fmt(row['rotation_error_deg'])} deg, surface error {fmt(row['surface_error_mm'])} mm")
 
     by_object = []
     for workpiece in workpieces:
@@ -85,6 +79,20 @@ def run(out_dir=None, *, positions: int | None = None, workpieces=WORKPIECES, se
     if out_dir is not None:
         result.write(out_dir, figure(result))
     return result
+
+
+def _run(workpiece: str, settings: StudySettings, scanner, position: int) -> dict:
+    """One capture from ``scanner`` calibrated and scored (a task: runs in any process)."""
+    scene, truth = prepared(workpiece, settings.seed)
+    scan = scanner.scan(scene)
+    result, error = calibrate_scan(scan, truth, settings, settings.seed + position)
+    row = {"workpiece": workpiece, "diagonal_mm": truth.diagonal, "position": position,
+           "workpiece_points": int(scan.mask("workpiece").sum()),
+           "reference_points": int(scan.mask("reference").sum()),
+           **score(result, error, truth, scan), **pose_columns("W", None if result is None else result.W)}
+    row["relative_surface_error"] = (None if row["surface_error_mm"] is None
+                                     else row["surface_error_mm"] / truth.diagonal)
+    return row
 
 
 def figure(result: StudyResult):

@@ -12,46 +12,32 @@ import numpy as np
 
 from .. import frames
 from ..errors import InputError
+from ..parallel import Runner
 from ..simulate.scanner import scanner_ring
-from ..simulate.scene import build_scene
-from .common import (StudyResult, StudySettings, Truth, TARGET_OMEGA_SPREAD_DEG, TARGET_ROTATION_DEG,
+from .common import (StudyResult, StudySettings, TARGET_OMEGA_SPREAD_DEG, TARGET_ROTATION_DEG,
                      TARGET_TRANSLATION_MM, accepted, calibrate_scan, fmt, fraction, new_figure, pose_columns,
-                     score, spread, stat, target)
+                     prepared, score, spread, stat, target)
 
 NAME = "placement"
 TITLE = "Scanner placement: W from K scanner positions (paper Table 1, Fig. 9)"
 
 
 def run(out_dir=None, *, positions: int | None = None, workpiece: str = "car", arc_deg: float = 360.0,
-        settings: StudySettings = StudySettings(), progress=None) -> StudyResult:
+        settings: StudySettings = StudySettings(), progress=None, runner=None) -> StudyResult:
     """Calibrate one scene from ``positions`` scanner placements (default 5, quick 2) spread over
-    ``arc_deg`` of azimuth around it."""
+    ``arc_deg`` of azimuth around it; ``runner``: where (parallel.Runner; default here, one after the
+    other)."""
     k = positions if positions is not None else (2 if settings.quick else 5)
     if k < 1:
         raise InputError(f"placement: need at least one scanner position, got {k}")
     say = progress or (lambda message: None)
-    scene = build_scene(workpiece, seed=settings.seed)
-    truth = Truth(scene, settings.seed)
+    scene, truth = prepared(workpiece, settings.seed)
+    ring = scanner_ring(scene, k, seed=settings.seed, arc_deg=arc_deg, **settings.scanner_settings())
     rows, table1 = [], []
-    for i, scanner in enumerate(scanner_ring(scene, k, seed=settings.seed, arc_deg=arc_deg,
-                                             **settings.scanner_settings()), start=1):
-        scan = scanner.scan(scene)
-        result, error = calibrate_scan(scan, truth, settings, settings.seed + i)
-        away = scanner.position - scanner.look_at
-        row = {"position": i,
-               "azimuth_deg": float(np.degrees(np.arctan2(away[1], away[0]))),
-               "elevation_deg": float(np.degrees(np.arcsin(away[2] / np.linalg.norm(away)))),
-               "distance_mm": float(np.linalg.norm(away)),
-               "workpiece_points": int(scan.mask("workpiece").sum()),
-               "reference_points": int(scan.mask("reference").sum()),
-               **score(result, error, truth, scan),
-               "rotation_bound_deg": None if result is None else result.uncertainty.get("rotation_bound_deg")}
-        for name in ("U", "V", "W"):
-            row.update(pose_columns(name, None if result is None else getattr(result, name)))
-        row.update(pose_columns("U_true", scan.U))
-        row.update(pose_columns("V_true", scan.V))
+    tasks = [(workpiece, settings, scanner, i) for i, scanner in enumerate(ring, start=1)]
+    for row in (runner or Runner(workers=1)).map(_run, tasks):
         rows.append(row)
-        say(f"{NAME} {i}/{k}: azimuth {row['azimuth_deg']:.0f} deg, {row['status']}, Omega(W) "
+        say(f"{NAME} {row['position']}/{k}: azimuth {row['azimuth_deg']:.0f} deg, {row['status']}, Omega(W) "
             f"{fmt(row['W_omega_deg'])} deg, toolpath error {fmt(row['toolpath_error_mm'])} mm "
             f"(bound {fmt(row['toolpath_bound_mm'])} mm)")
     for name in ("U", "V", "W"):
@@ -99,6 +85,27 @@ def run(out_dir=None, *, positions: int | None = None, workpiece: str = "car", a
     if out_dir is not None:
         result.write(out_dir, figure(result))
     return result
+
+
+def _run(workpiece: str, settings: StudySettings, scanner, position: int) -> dict:
+    """One capture from ``scanner`` calibrated and scored (a task: runs in any process)."""
+    scene, truth = prepared(workpiece, settings.seed)
+    scan = scanner.scan(scene)
+    result, error = calibrate_scan(scan, truth, settings, settings.seed + position)
+    away = scanner.position - scanner.look_at
+    row = {"position": position,
+           "azimuth_deg": float(np.degrees(np.arctan2(away[1], away[0]))),
+           "elevation_deg": float(np.degrees(np.arcsin(away[2] / np.linalg.norm(away)))),
+           "distance_mm": float(np.linalg.norm(away)),
+           "workpiece_points": int(scan.mask("workpiece").sum()),
+           "reference_points": int(scan.mask("reference").sum()),
+           **score(result, error, truth, scan),
+           "rotation_bound_deg": None if result is None else result.uncertainty.get("rotation_bound_deg")}
+    for name in ("U", "V", "W"):
+        row.update(pose_columns(name, None if result is None else getattr(result, name)))
+    row.update(pose_columns("U_true", scan.U))
+    row.update(pose_columns("V_true", scan.V))
+    return row
 
 
 def table1_lines(result: StudyResult) -> list[str]:

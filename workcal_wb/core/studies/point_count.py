@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..simulate.scanner import Scanner
-from ..simulate.scene import build_scene
-from .common import (StudyResult, StudySettings, Truth, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
-                     calibrate_scan, fmt, fraction, new_figure, pose_columns, score, stat, target)
+from ..parallel import Runner
+from .common import (StudyResult, StudySettings, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
+                     calibrate_scan, capture, fmt, fraction, new_figure, pose_columns, prepared, score, stat,
+                     target)
 
 NAME = "point-count"
 TITLE = "Point count: accuracy of W against the number of scan points per region"
@@ -22,32 +22,25 @@ QUICK_SIZES = (500, None)
 
 
 def run(out_dir=None, *, sizes=None, n: int | None = None, workpiece: str = "car",
-        settings: StudySettings = StudySettings(), progress=None) -> StudyResult:
-    """``n`` random subsamples (default 3, quick 1) at each size in ``sizes`` (points per region)."""
+        settings: StudySettings = StudySettings(), progress=None, runner=None) -> StudyResult:
+    """``n`` random subsamples (default 3, quick 1) at each size in ``sizes`` (points per region);
+    ``runner``: where they are calibrated (parallel.Runner; default here, one after the other)."""
     sizes = tuple(sizes) if sizes is not None else (QUICK_SIZES if settings.quick else SIZES)
     n = n if n is not None else (1 if settings.quick else 3)
     if n < 1 or not sizes or any(s is not None and s < 1 for s in sizes):
         raise InputError(f"point-count: need n >= 1 and sizes >= 1 point, got n = {n}, sizes = {sizes}")
     say = progress or (lambda message: None)
-    scene = build_scene(workpiece, seed=settings.seed)
-    truth = Truth(scene, settings.seed)
-    scan = Scanner.aimed_at(scene, seed=settings.seed, **settings.scanner_settings()).scan(scene)
+    scan = capture(workpiece, settings)
     masks = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
-    rng = np.random.default_rng(settings.seed)
+    rng = np.random.default_rng(settings.seed)  # the subsamples drawn here, in order, whatever runs them
+    tasks = [(workpiece, settings, size, repeat, _subsample(scan, masks, size, settings.regions, rng))
+             for size in sizes for repeat in range(1, n + 1)]
     rows = []
-    for size in sizes:
-        for repeat in range(1, n + 1):
-            keep = _subsample(scan, masks, size, settings.regions, rng)
-            result, error = calibrate_scan(scan, truth, settings, settings.seed + repeat, keep=keep)
-            row = {"points_per_region": "all" if size is None else size, "repeat": repeat,
-                   "workpiece_points": int(scan.mask("workpiece")[keep].sum()),
-                   "reference_points": int(scan.mask("reference")[keep].sum()),
-                   "scan_points": len(keep), **score(result, error, truth, scan),
-                   **pose_columns("W", None if result is None else result.W)}
-            rows.append(row)
-            say(f"{NAME} {row['points_per_region']} points, run {repeat}/{n}: {row['status']}, rotation error "
-                f"{fmt(row['rotation_error_deg'])} deg, toolpath error {fmt(row['toolpath_error_mm'])} mm "
-                f"(bound {fmt(row['toolpath_bound_mm'])} mm)")
+    for row in (runner or Runner(workers=1)).map(_run, tasks):
+        rows.append(row)
+        say(f"{NAME} {row['points_per_region']} points, run {row['repeat']}/{n}: {row['status']}, rotation error "
+            f"{fmt(row['rotation_error_deg'])} deg, toolpath error {fmt(row['toolpath_error_mm'])} mm "
+            f"(bound {fmt(row['toolpath_bound_mm'])} mm)")
 
     by_size = []
     for size in dict.fromkeys(r["points_per_region"] for r in rows):
@@ -93,6 +86,18 @@ def run(out_dir=None, *, sizes=None, n: int | None = None, workpiece: str = "car
     if out_dir is not None:
         result.write(out_dir, figure(result))
     return result
+
+
+def _run(workpiece: str, settings: StudySettings, size, repeat: int, keep) -> dict:
+    """One subsample calibrated and scored (a task: runs in any process)."""
+    _, truth = prepared(workpiece, settings.seed)
+    scan = capture(workpiece, settings)
+    result, error = calibrate_scan(scan, truth, settings, settings.seed + repeat, keep=keep)
+    return {"points_per_region": "all" if size is None else size, "repeat": repeat,
+            "workpiece_points": int(scan.mask("workpiece")[keep].sum()),
+            "reference_points": int(scan.mask("reference")[keep].sum()),
+            "scan_points": len(keep), **score(result, error, truth, scan),
+            **pose_columns("W", None if result is None else result.W)}
 
 
 def _subsample(scan, masks, size, regions, rng) -> np.ndarray:

@@ -11,10 +11,10 @@ import numpy as np
 
 from .. import frames
 from ..errors import InputError
-from ..simulate.scanner import Scanner
-from ..simulate.scene import build_scene
-from .common import (StudyResult, StudySettings, Truth, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
-                     calibrate_scan, fmt, fraction, new_figure, pose_columns, score, spread, stat, target)
+from ..parallel import Runner
+from .common import (StudyResult, StudySettings, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
+                     calibrate_scan, capture, fmt, fraction, new_figure, pose_columns, prepared, score, spread,
+                     stat, target)
 
 NAME = "repeatability"
 TITLE = "Repeatability: one scan pair, N matches from scratch (paper Fig. 7)"
@@ -23,23 +23,20 @@ ZOOM_WINDOW_DEG = 1.0
 
 
 def run(out_dir=None, *, n: int | None = None, workpiece: str = "car", settings: StudySettings = StudySettings(),
-        progress=None) -> StudyResult:
-    """N calibrations (default 10, quick 3) of one simulated capture of ``workpiece``."""
+        progress=None, runner=None) -> StudyResult:
+    """N calibrations (default 10, quick 3) of one simulated capture of ``workpiece`` (``runner``:
+    where they run, parallel.Runner; default here, one after the other)."""
     n = n if n is not None else (3 if settings.quick else 10)
     if n < 1:
         raise InputError(f"repeatability: need at least one match, got n = {n}")
     say = progress or (lambda message: None)
-    scene = build_scene(workpiece, seed=settings.seed)
-    truth = Truth(scene, settings.seed)
-    scan = Scanner.aimed_at(scene, seed=settings.seed, **settings.scanner_settings()).scan(scene)
+    _, truth = prepared(workpiece, settings.seed)
+    scan = capture(workpiece, settings)
     rows = []
-    for i in range(n):
-        seed = settings.seed + 1000 * (i + 1)
-        result, error = calibrate_scan(scan, truth, settings, seed)
-        row = {"run": i + 1, "seed": seed, **score(result, error, truth, scan),
-               **pose_columns("W", None if result is None else result.W)}
-        rows.append(row)
-        say(f"{NAME} {i + 1}/{n}: {row['status']}, Omega(W) {fmt(row['W_omega_deg'])} deg, "
+    tasks = [(workpiece, settings, settings.seed + 1000 * (i + 1)) for i in range(n)]
+    for i, row in enumerate((runner or Runner(workers=1)).map(_run, tasks), start=1):
+        rows.append({"run": i, **row})
+        say(f"{NAME} {i}/{n}: {row['status']}, Omega(W) {fmt(row['W_omega_deg'])} deg, "
             f"rotation error {fmt(row['rotation_error_deg'])} deg")
 
     ok = accepted(rows)
@@ -70,6 +67,14 @@ def run(out_dir=None, *, n: int | None = None, workpiece: str = "car", settings:
     if out_dir is not None:
         result.write(out_dir, figure(result))
     return result
+
+
+def _run(workpiece: str, settings: StudySettings, seed: int) -> dict:
+    """One run: the capture calibrated from scratch with ``seed`` (a task: runs in any process)."""
+    _, truth = prepared(workpiece, settings.seed)
+    scan = capture(workpiece, settings)
+    result, error = calibrate_scan(scan, truth, settings, seed)
+    return {"seed": seed, **score(result, error, truth, scan), **pose_columns("W", None if result is None else result.W)}
 
 
 def figure(result: StudyResult):
