@@ -149,7 +149,7 @@ def match_pose(scan: Cloud, model, init: np.ndarray, options: MatchOptions = Mat
     follow once the pose is chosen (a bootstrap refit needs the pose alone); None where ``match``
     gives no matrix."""
     options = _checked_options(replace(options, **overrides))
-    with pointops.single_threaded_blas():
+    with pointops.blas_threads(options.blas_threads):
         found = _match(scan, model, init, options, pose_only=True)
     return found.matrix if isinstance(found, MatchResult) else found
 
