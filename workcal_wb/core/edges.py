@@ -28,16 +28,11 @@ CHECK_RATIO = 2 * WEAK_RATIO
 # A point is off the model when farther than this many residual sigmas, and never closer than this
 # fraction of the tolerance (a noise-free scan would otherwise count every tilt of a face) ...
 OFF_SIGMAS, OFF_FLOOR_TOLERANCES = 3.0, 0.1
-# ... and the slide has reached an edge when more points than the fewest are off, by more than
-# EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own jitter (points at the threshold cross it
-# back and forth as the pose moves: ~ the square root of the count).
+# ... and the slide has reached an edge when it pushes more points off than the fewest, by more than
+# EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own jitter (~ its square root).
 EXTRA_OFF_POINTS, COUNT_SIGMAS = 5, 3.0
-# The slide is followed this many tolerances each way; an edge farther out does not pin it.  An edge
-# shows only once the slide has pushed more points past it than the count's jitter: where few points
-# lie along the edges (a block partly hidden by the workpiece it touches, residuals of 0.07 mm) that
-# takes over 2 tolerances (measured: 0.5-1.0 mm).  A wide interval is no risk: the pose is centred in
-# it and the bootstrap refits measure how well the middle is known.
-REACH_TOLERANCES = 5.0
+# The slide is followed this many tolerances each way; an edge farther out does not pin it.
+REACH_TOLERANCES = 2.0
 # Profile samples across the reach each way, then halvings of the step at each end.
 PROFILE_STEPS, BISECTIONS = 12, 5
 
@@ -103,31 +98,35 @@ def slide(twist, centre, amount: float) -> np.ndarray:
 
 
 def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, threshold: float, reach: float):
-    """(lo, hi) amounts of ``twist`` between which the count of points off the surface stays
-    within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when the slide
-    meets no edge within ``reach`` on a side."""
-    def off(points, amount):
-        return surface.exact_distance(frames.apply(slide(twist, centre, amount), points)) > threshold
+    """(lo, hi) amounts of ``twist`` between which the count of points the slide pushes off the
+    surface stays within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when
+    the slide meets no edge within ``reach`` on a side."""
+    rest = surface.exact_distance(moved)
 
-    # Only points that change side somewhere within reach can change the count.
-    at_rest = off(moved, 0.0)
-    changing = (off(moved, -reach) != at_rest) | (off(moved, reach) != at_rest)
-    if changing.sum() <= EXTRA_OFF_POINTS:
+    def pushed(which, amount):
+        """Which of the points ``which`` the slide pushes off: past the threshold and farther than at
+        rest by half of it.  Noise at the threshold (or a faceted model turning under its points)
+        moves by far less, and the points off everywhere (the noise's tail, stray points) never
+        count: only an edge makes the count grow with the slide."""
+        distance = surface.exact_distance(frames.apply(slide(twist, centre, amount), moved[which]))
+        return (distance > threshold) & (distance - rest[which] > threshold / 2)
+
+    every = np.arange(len(moved))
+    which = np.flatnonzero(pushed(every, -reach) | pushed(every, reach))  # the only points that can count
+    if len(which) <= EXTRA_OFF_POINTS:
         return None
-    points = moved[changing]
     amounts = np.linspace(-reach, reach, 2 * PROFILE_STEPS + 1)
-    counts = np.array([off(points, a).sum() for a in amounts]) + (at_rest & ~changing).sum()
+    counts = np.array([pushed(which, a).sum() for a in amounts])
     limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min()))
     low = np.flatnonzero(counts <= limit)
     first, last = low[0], low[-1]
     if first == 0 or last == len(amounts) - 1:
         return None  # still in the valley at the end of reach
-    limit -= (at_rest & ~changing).sum()
 
     def crossing(inside, outside):
         for _ in range(BISECTIONS):
             middle = (inside + outside) / 2
-            inside, outside = (middle, outside) if off(points, middle).sum() <= limit else (inside, middle)
+            inside, outside = (middle, outside) if pushed(which, middle).sum() <= limit else (inside, middle)
         return (inside + outside) / 2
 
     return crossing(amounts[first], amounts[first - 1]), crossing(amounts[last], amounts[last + 1])
