@@ -51,8 +51,10 @@ TOUCHING_SHARE = 0.9
 # tolerance for an ellipsoid or the L-block on a car; fitness 0.36-0.86 for flipped L-block poses).
 MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": 50.0}
 MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
-# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
+# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
+# unless a search comes back to a pose it found before (within these limits).
 SEARCH_ATTEMPTS = 3
+SAME_POSE_DEG, SAME_POSE_DIAGONALS = 1.0, 0.01
 GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
 # Where the reference touches something, its region keeps only points this close to its surface: this
 # many times the scan's noise, and at least MIN_ON_SURFACE_MM.
@@ -199,11 +201,24 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
     best = None
     for attempt in range(SEARCH_ATTEMPTS):
         result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
+        again = best is not None and _same_pose(result, best, surface)
         if best is None or rank(result) > rank(best):
             best = result
         if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
             break
+        if again:  # another search came back to the same pose: the search is not what falls short
+            break
+        if result.coverage < options.get("min_coverage", MatchOptions.min_coverage) <= GOOD_FITNESS[role] <= result.fitness:
+            break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
     return best
+
+
+def _same_pose(first: MatchResult, second: MatchResult, surface: SurfaceModel) -> bool:
+    """Whether two matches placed the model alike (within SAME_POSE_DEG and SAME_POSE_DIAGONALS)."""
+    if first.matrix is None or second.matrix is None:
+        return False
+    return (frames.rotation_between_deg(first.matrix, second.matrix) < SAME_POSE_DEG
+            and np.linalg.norm(first.matrix[:3, 3] - second.matrix[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
 
 
 @dataclass
