@@ -1,7 +1,8 @@
 """Rays cast against triangle meshes by open3d's RaycastingScene, where its ray casting works.
 
 open3d 0.16 (Debian 12) builds a RaycastingScene whose ``cast_rays`` returns no hits at all; 0.19
-(Debian 13) casts them correctly (Embree: exact, and several times quicker than our numpy z-buffer).
+(Debian 13) casts them correctly (Embree, single precision: a scan of the simulated cell, 90k to 280k
+rays on 55k to 100k triangles, takes half the time of our numpy z-buffer, with the same pixels).
 ``works()`` casts two rays at one triangle once per process, one that must hit it at a known distance
 and one that must miss, and caches the answer: callers cast rays where it works and keep their own
 z-buffer (simulate.raster) where it does not.
