@@ -103,6 +103,8 @@ def check_fanuc(text: str, name: str) -> None:
         if "!" in line[:8]:
             assert len(line[7:-2]) <= 32, f"/MN line {n}: remark over 32 characters"
         used += [int(p) for p in re.findall(r"^\s*\d+:[JL] P\[(\d+)\]", line)]
+    for config in re.findall(r"CONFIG : '([^']*)'", text):
+        assert re.fullmatch(r"[NF] [UD] [TB], -?\d, -?\d, -?\d", config), f"CONFIG {config!r}: not flip elbow base, 3 turns"
     defined = [int(p) for p in re.findall(r"^P\[(\d+)\]\{", text, flags=re.M)]
     assert defined == used == list(range(1, len(used) + 1)), "every P[] used once, defined, numbered from 1"
 

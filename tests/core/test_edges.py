@@ -13,6 +13,7 @@ import pytest
 
 from workcal_wb.core import frames
 from workcal_wb.core.edges import centre_on_edges, slide
+from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.refine import RefineState, refine_exact
 from workcal_wb.core.simulate import shapes
@@ -94,3 +95,57 @@ def test_slide_is_a_rigid_motion_of_the_asked_size():
     np.testing.assert_allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-12)
     np.testing.assert_allclose(frames.apply(T, centre[None])[0], centre + [0.5, 0.0, 0.0], atol=1e-12)
     assert np.isclose(frames.rotation_between_deg(T, np.eye(4)), np.degrees(0.005))
+
+
+@pytest.fixture(scope="module")
+def plate_views():
+    """{name: (scan points, true U, surface)}: verdict-table views (seed 0) of plates seen on one face
+    and one side, whose slide along the side only the face's outline stops, and of a curved tile
+    whose search finds only a flipped pose (issue 17)."""
+    from workcal_wb.core.benchmark.verdicts import simulated_cases
+
+    wanted = ("notched plate #4", "near-square plate #2", "near-square plate #5", "curved tile #7")
+    cases = [c for c in simulated_cases(0) if c.name.startswith(wanted)]
+    surfaces = {}
+    return {c.name.split(",")[0]: (c.scan, c.truth, surfaces.setdefault(c.model.name, SurfaceModel(c.model)))
+            for c in cases}
+
+
+@pytest.mark.parametrize("name, along", [("notched plate #4", (1.0, 0.0, 0.0)),  # 0.15 mm noise: 3 sigma ate the reach
+                                          ("near-square plate #2", (0.0, 1.0, 0.0))])  # a noisier side face's tail
+def test_plate_slide_held_by_the_outline_of_the_face_it_shows(plate_views, name, along):
+    """Slid 0.3 mm along the motion its faces leave free, the pose is brought back between the
+    face's edges, and the motion is reported held by them, not free."""
+    points, truth, surface = plate_views[name]
+    along = np.asarray(along)
+    start = frames.rigid(translation=0.3 * along) @ frames.invert(truth)
+    residuals = surface.exact_distance(frames.apply(start, points))
+    sigma = 1.4826 * float(np.median(residuals))  # the fit's robust residual scale
+    T, stability = centre_on_edges(points, surface, start, gate=1.0, sigma=sigma, tolerance_mm=0.3)
+    assert stability["held_by_edges"] and not stability["free_motions"], stability
+    error = frames.apply(frames.invert(truth), frames.apply(frames.invert(T), surface.points.mean(axis=0)[None]))[0]
+    assert abs((error - surface.points.mean(axis=0)) @ along) < stability["held_by_edges"][0]["slack_mm"]
+
+
+@pytest.mark.parametrize("name", ["near-square plate #5", "near-square plate #2"])
+def test_plate_held_by_its_outline_comes_back_ok(plate_views, name):
+    """Near-square plates seen on their top and one side (0.19 and 0.05 mm noise, 0.3 mm tolerance):
+    the right pose, reported ok (they came back "ambiguous: free translation")."""
+    points, truth, surface = plate_views[name]
+    result = match(Cloud(points, name=name), surface, tolerance_mm=0.3)
+    assert result.status == "ok", result.reasons
+    error = frames.invert(truth) @ result.matrix
+    assert frames.rotation_between_deg(error, np.eye(4)) < 0.1
+    assert np.linalg.norm(frames.apply(error, surface.points) - surface.points, axis=1).max() < 0.5
+
+
+def test_flipped_tile_leaving_points_beside_its_outline_is_not_held_by_its_edges(plate_views):
+    """The search finds the tile only turned over (the right pose is not among its candidates); the
+    flip leaves some 60 scan points more than 1 mm off, beside its outline.  Its slides along the
+    bend must not be called held by edges there (the pose came back "ok" when only the points that
+    cross an edge were counted)."""
+    points, truth, surface = plate_views["curved tile #7"]
+    result = match(Cloud(points, name="curved tile #7"), surface, tolerance_mm=0.3)
+    right = np.linalg.norm(frames.apply(frames.invert(truth) @ result.matrix, surface.points) - surface.points,
+                           axis=1).max() < 1.0
+    assert result.status != "ok" or right, result.reasons

@@ -1,6 +1,7 @@
 """``python3 -m workcal_wb toolpath``: exit codes, messages, options (run in-process)."""
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -75,6 +76,7 @@ def test_envelope_violation_exit_1(files, capsys):
     (["--out", "prog.xyz"], "cannot tell the output format"),
     (["--calibration", "nope.json"], "nope.json: file does not exist"),
     (["--in", "part.FCStd"], "FreeCAD documents"),
+    (["--fanuc-config", "N U T"], "Fanuc configuration 'N U T'"),
 ])
 def test_bad_input_exit_2(files, capsys, monkeypatch, args, message):
     monkeypatch.chdir(files)
@@ -109,6 +111,13 @@ def test_rotary_table_frame_and_angle(files):
     np.testing.assert_allclose(csv_points(out90), frames.apply(chain, frames.apply(frames.invert(W), csv_points(out0))),
                                atol=2e-3)
     assert "rotary table at 90.0000 deg" in out90.read_text()
+
+
+def test_fanuc_configuration_option(files):
+    out = files / "prog.ls"
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out), "--fanuc-config", "F U T, -1, 0, 1") == 0
+    text = out.read_text()
+    assert text.count("CONFIG : 'F U T, -1, 0, 1'") == len(re.findall(r"^P\[\d+\]\{", text, flags=re.M)) > 4
 
 
 def test_krl_mode_and_chord_tolerance(files):

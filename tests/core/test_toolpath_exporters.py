@@ -13,6 +13,7 @@ from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.toolpath import export, linearised, parse_gcode, read_gcode
+from program_checkers import check_fanuc
 
 W = frames.from_euler_zyz(25.0, 35.0, -70.0, (812.5, -143.2, 95.0))
 TOL_MM, TOL_DEG = 1e-3, 1e-3
@@ -151,6 +152,17 @@ def test_fanuc_poses_parse_back_with_whole_cm_per_min_speeds(path, tmp_path):
         assert np.linalg.norm(pose[:3, 3] - p) < TOL_MM
         assert frames.rotation_between_deg(frames.rigid(R), pose) < TOL_DEG
         assert speed == pytest.approx(f, abs=5.0)  # 1 cm/min resolution
+
+
+def test_fanuc_configuration_is_the_integrators(path, tmp_path):
+    out = tmp_path / "prog.ls"
+    export(path, calibration(), "fanuc", out, fanuc_config="F D B, 1, 0, -1")
+    text = out.read_text()
+    assert text.count("CONFIG : 'F D B, 1, 0, -1'") == len(parse_fanuc(text)) and "N U T" not in text
+    check_fanuc(text, "PROG")
+    with pytest.raises(InputError, match="Fanuc configuration 'X U T, 0, 0, 0'"):
+        export(path, calibration(), "fanuc", tmp_path / "bad.ls", fanuc_config="X U T, 0, 0, 0")
+    assert not (tmp_path / "bad.ls").exists()
 
 
 def test_krl_transformed_mode_writes_base_frame_points(path, tmp_path):

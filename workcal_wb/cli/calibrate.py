@@ -161,7 +161,7 @@ def _program(args, toolpath, result, outputs) -> str | None:
     name = f"{PROGRAM_STEM}{FORMATS[args.format].EXTENSION}"
     try:
         export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
-               vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
+               vertical_tol_deg=args.vertical_tol, rotary=args.rotary, fanuc_config=args.fanuc_config,
                calibration_source=str(Path(args.out) / "result.json"))
     except ExportRefused as exc:
         return str(exc)

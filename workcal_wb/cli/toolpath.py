@@ -17,7 +17,7 @@ from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN
 from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
 from workcal_wb.core.toolpath.gcode import BLOCK_DELETE, DWELL_P
 from workcal_wb.core.toolpath.orientation import ROTARY
-from workcal_wb.core.toolpath.safety import DEFAULT_VERTICAL_TOL_DEG
+from workcal_wb.core.toolpath.safety import DEFAULT_FANUC_CONFIG, DEFAULT_VERTICAL_TOL_DEG
 
 
 def add_parser(subparsers):
@@ -66,6 +66,9 @@ def add_machine_options(p) -> None:
                         f"(default {DEFAULT_VERTICAL_TOL_DEG} deg)")
     p.add_argument("--rotary", choices=list(ROTARY), default="ab",
                    help="the machine's two rotary axes, for A/B/C words read and written (default ab)")
+    p.add_argument("--fanuc-config", default=DEFAULT_FANUC_CONFIG, metavar="'F U T, 0, 0, 0'",
+                   help="Fanuc: the robot's configuration at the workpiece (flip, elbow, base side, turns of J1 J4 "
+                        f"J6), written on every position; WorkCal has no robot kinematics (default '{DEFAULT_FANUC_CONFIG}')")
     p.add_argument("--block-delete", choices=BLOCK_DELETE,
                    help="the block-delete switch for '/' blocks: on skips them, off runs them "
                         "(required when the file has them)")
@@ -106,7 +109,8 @@ def run(args) -> int:
     options = ExportOptions(force=args.force, table=_table(args), envelope=args.envelope,
                             chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
                             machine=args.machine, vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
-                            max_lines=args.max_lines, calibration_source=args.calibration)
+                            max_lines=args.max_lines, fanuc_config=args.fanuc_config,
+                            calibration_source=args.calibration)
     for warning in toolpath.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     try:

@@ -28,10 +28,13 @@ CHECK_RATIO = 2 * WEAK_RATIO
 # A point is off the model when farther than this many residual sigmas, and never closer than this
 # fraction of the tolerance (a noise-free scan would otherwise count every tilt of a face) ...
 OFF_SIGMAS, OFF_FLOOR_TOLERANCES = 3.0, 0.1
-# ... and the slide has reached an edge when it pushes more points off than the fewest, by more than
-# EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own jitter (~ its square root).
+# ... and the slide has reached an edge when more of the points that cross an edge within reach
+# are off than at the fewest, by more than EXTRA_OFF_POINTS and than COUNT_SIGMAS x the count's own
+# jitter (points at the threshold cross it back and forth as the pose moves: ~ the square root of
+# the count).  Points that cross no edge (a noisier face's tail, stray points) are not counted.
 EXTRA_OFF_POINTS, COUNT_SIGMAS = 5, 3.0
-# The slide is followed this many tolerances each way; an edge farther out does not pin it.
+# The slide is followed this many tolerances each way past the off threshold (a point at an edge is
+# only off once it has gone the threshold past it); an edge farther out does not pin it.
 REACH_TOLERANCES = 2.0
 # Profile samples across the reach each way, then halvings of the step at each end.
 PROFILE_STEPS, BISECTIONS = 12, 5
@@ -52,8 +55,8 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
     """Move ``T`` (scan -> model) to the middle of the edge interval along each weak motion and
     return it with the stability of the fit (see stability.stability) extended by
     ``held_by_edges``: for each such motion its description, eigenvalue and half-width
-    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way are listed as
-    free when their eigenvalue is below FREE_MOTION_RATIO."""
+    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way (past the off
+    threshold) are listed as free when their eigenvalue is below FREE_MOTION_RATIO."""
     points = points[surface.nearest_cell(frames.apply(T, points), gate + surface.spacing)[2]]  # clutter is no edge
     moved = frames.apply(T, points)
     closest, normals = surface.closest_points(moved)
@@ -64,7 +67,7 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
                    "constrained": False, "held_by_edges": []}
     vals, vecs, centre, radius = gelfand(moved[on], normals[on])
     threshold = max(OFF_SIGMAS * sigma, OFF_FLOOR_TOLERANCES * tolerance_mm)
-    reach = REACH_TOLERANCES * tolerance_mm
+    reach = threshold + REACH_TOLERANCES * tolerance_mm
     free, held = [], []
     for i in np.flatnonzero(vals < WEAK_RATIO):
         twist = _unit_twist(vecs[:, i], centre, radius, moved[on])
@@ -98,26 +101,30 @@ def slide(twist, centre, amount: float) -> np.ndarray:
 
 
 def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, threshold: float, reach: float):
-    """(lo, hi) amounts of ``twist`` between which the count of points the slide pushes off the
-    surface stays within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when
-    the slide meets no edge within ``reach`` on a side."""
-    rest = surface.exact_distance(moved)
+    """(lo, hi) amounts of ``twist`` between which the count of points off the surface stays
+    within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when the slide
+    meets no edge within ``reach`` on a side."""
+    def distance(points, amount):
+        return surface.exact_distance(frames.apply(slide(twist, centre, amount), points))
 
-    def pushed(which, amount):
-        """Which of the points ``which`` the slide pushes off: past the threshold and farther than at
-        rest by half of it.  Noise at the threshold (or a faceted model turning under its points)
-        moves by far less, and the points off everywhere (the noise's tail, stray points) never
-        count: only an edge makes the count grow with the slide."""
-        distance = surface.exact_distance(frames.apply(slide(twist, centre, amount), moved[which]))
-        return (distance > threshold) & (distance - rest[which] > threshold / 2)
+    def off(points, amount):
+        return distance(points, amount) > threshold
 
-    every = np.arange(len(moved))
-    which = np.flatnonzero(pushed(every, -reach) | pushed(every, reach))  # the only points that can count
-    if len(which) <= EXTRA_OFF_POINTS:
+    # Only points whose distance changes by more than the threshold within reach can change the
+    # count: those crossing an edge.  Points hovering at the threshold (a noisy face's tail, a
+    # faceted round surface turned about its axis) would jitter the count without an edge.
+    at_rest = distance(moved, 0.0)
+    changing = ((np.abs(distance(moved, -reach) - at_rest) > threshold)
+                | (np.abs(distance(moved, reach) - at_rest) > threshold))
+    if changing.sum() <= EXTRA_OFF_POINTS:
         return None
+    points = moved[changing]
     amounts = np.linspace(-reach, reach, 2 * PROFILE_STEPS + 1)
-    counts = np.array([pushed(which, a).sum() for a in amounts])
-    limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min()))
+    counts = np.array([off(points, a).sum() for a in amounts])
+    # Points left farther off than the whole reach are unexplained by the fit: where they lie beside
+    # the part, its edge may be misplaced, so they widen the allowance as much as points that cross.
+    far = np.count_nonzero(~changing & (at_rest > reach))
+    limit = counts.min() + max(EXTRA_OFF_POINTS, COUNT_SIGMAS * np.sqrt(counts.min() + far))
     low = np.flatnonzero(counts <= limit)
     first, last = low[0], low[-1]
     if first == 0 or last == len(amounts) - 1:
@@ -126,7 +133,7 @@ def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, thre
     def crossing(inside, outside):
         for _ in range(BISECTIONS):
             middle = (inside + outside) / 2
-            inside, outside = (middle, outside) if pushed(which, middle).sum() <= limit else (inside, middle)
+            inside, outside = (middle, outside) if off(points, middle).sum() <= limit else (inside, middle)
         return (inside + outside) / 2
 
     return crossing(amounts[first], amounts[first - 1]), crossing(amounts[last], amounts[last + 1])

@@ -210,9 +210,8 @@ VERDICTS_HEADING = "## Verdicts"
 
 def _verdicts(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
     """The verdicts section (see verdicts.py), computed in a child process, and the goals missed that
-    count as targets: a wrong pose reported "ok" is one; right poses not "ok" are listed, not
-    counted, since a nearly symmetric part seen where its odd feature does not show is rightly
-    ambiguous."""
+    count as targets: a wrong pose reported "ok" is one; right poses not "ok" are listed with their
+    reasons in the section, not counted here."""
     from . import verdicts
 
     log("benchmark: verdicts ...")

@@ -241,8 +241,7 @@ def table(rows: list[VerdictRow], seed: int) -> tuple[str, list]:
               f"- right poses of parts without symmetry, at a tolerance above the scan's noise, not reported \"ok\": "
               f"**{len(missed)} of {len(eligible)}** (goal 0)", ""]
     if missed:
-        lines += ["Those cases and why (a nearly symmetric part seen from where its odd feature does not show is "
-                  "rightly ambiguous; so is a face whose slide only its edges stop):", "",
+        lines += ["Those cases and why:", "",
                   "| case | points | status | first reason |", "|---|---|---|---|"]
         lines += [f"| {r.case} | {r.points:,} | {r.status} | {r.reason} |" for r in missed]
         lines.append("")

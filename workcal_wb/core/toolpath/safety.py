@@ -7,6 +7,7 @@ export leaves no file behind and an older file untouched.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,8 @@ SANITY_MM = 50_000.0
 MACHINES = ("3axis", "5axis-tcp", "robot")
 # Largest tilt of the tool axis from the machine's Z that a 3-axis export accepts unless told otherwise.
 DEFAULT_VERTICAL_TOL_DEG = 0.05
+DEFAULT_FANUC_CONFIG = "N U T, 0, 0, 0"
+FANUC_CONFIG = re.compile(r"[NF] [UD] [TB], -?[0-9], -?[0-9], -?[0-9]")
 
 
 class ExportRefused(WorkCalError):
@@ -89,6 +92,7 @@ class ExportOptions:
     vertical_tol_deg: float = DEFAULT_VERTICAL_TOL_DEG
     rotary: str = "ab"  # 5-axis G-code: the machine's two rotary axes (orientation.ROTARY)
     krl_mode: str = "base"
+    fanuc_config: str = DEFAULT_FANUC_CONFIG  # flip, elbow, base side, turns of J1 J4 J6: the robot's, not computed
     rapid_feed_mm_min: float = 6000.0
     max_lines: int | None = None  # lines per program part; None: the language's own limit
     calibration_source: str = "calibration"
@@ -102,6 +106,9 @@ class ExportOptions:
             raise InputError(f"vertical tolerance must be between 0 and 90 degrees, not {self.vertical_tol_deg}")
         if self.rotary not in orientation.ROTARY:
             raise InputError(f"unknown rotary axes {self.rotary!r}; use one of {', '.join(orientation.ROTARY)}")
+        if not FANUC_CONFIG.fullmatch(self.fanuc_config):
+            raise InputError(f"Fanuc configuration {self.fanuc_config!r}: expected flip (N/F), elbow (U/D), "
+                             "base side (T/B) and the turn numbers of J1, J4, J6, as in 'N U T, 0, 0, 0'")
         if not (math.isfinite(self.rapid_feed_mm_min) and self.rapid_feed_mm_min > 0):
             raise InputError(f"rapid feed must be a positive number of mm/min, not {self.rapid_feed_mm_min}")
         if self.max_lines is not None and self.max_lines < 10:

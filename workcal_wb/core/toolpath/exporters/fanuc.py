@@ -20,19 +20,18 @@ MAX_LINES = 9999  # /MN lines per program, as controllers and RoboDK's Fanuc pos
 MAX_SPEED_MM_S = 2000.0  # linear speed limit (12000 cm/min)
 REMARK_WIDTH = 29  # the teach pendant shows about 30 characters of a remark
 MESSAGE_WIDTH = 24
-CONFIG = "N U T, 0, 0, 0"
 JOINT_SPEED = "20%"
 DATE = "DATE 26-01-01  TIME 00:00:00"  # fixed, so an export repeats to the byte
 
 
-def positions_text(rotation, position, tools) -> list[str]:
+def positions_text(rotation, position, tools, config: str) -> list[str]:
     """The /POS entries P[1..N] in order."""
     xyz, wpr = numbers(position, 3), numbers(fanuc_wpr_deg(rotation), 4)
     out = []
     for i, tool in enumerate(tools):
         x, y, z = xyz[3 * i:3 * i + 3]
         w, p, r = wpr[3 * i:3 * i + 3]
-        out += [f"P[{i + 1}]{{", "   GP1:", f"\tUF : 0, UT : {tool},\t\tCONFIG : '{CONFIG}',",
+        out += [f"P[{i + 1}]{{", "   GP1:", f"\tUF : 0, UT : {tool},\t\tCONFIG : '{config}',",
                 f"\tX = {x} mm,\tY = {y} mm,\tZ = {z} mm,", f"\tW = {w} deg,\tP = {p} deg,\tR = {r} deg", "};"]
     return out
 
@@ -77,8 +76,8 @@ def render(job: common.ExportJob):
     notes = ["units: mm, speeds in cm/min (whole numbers: the controller's resolution)",
              "angles: W, P, R in degrees, fixed axes X then Y then Z (R = Rz(R) Ry(P) Rx(W))",
              "positions: robot base frame B as the world frame (UFRAME 0)",
-             f"configuration: CONFIG '{CONFIG}' on every position (WorkCal has no robot kinematics): touch up "
-             "P[1] of the first program if the robot starts in another configuration",
+             f"configuration: CONFIG '{job.options.fanuc_config}' on every position (WorkCal has no robot "
+             "kinematics: set the robot's configuration at the workpiece with --fanuc-config)",
              "termination: CNT0, FINE where the robot stops", *common.robot_notes(job, "cm/min"),
              f"PLACEHOLDERS to fill: UTOOL {', '.join(map(str, tools))} = the spindle's TCP with that tool, "
              "Z along the tool into the part"]
@@ -100,14 +99,14 @@ def render(job: common.ExportJob):
     parts = list(common.packed(_split_remarks(groups), limit))
     if len(parts) == 1 and len(head) + len(parts[0]) <= (job.options.max_lines or MAX_LINES):
         yield job.out, [_program(name, comment, head + _positions_of(parts[0])[0],
-                                 positions_text(*_targets(path, tool_of, _positions_of(parts[0])[1])))]
+                                 positions_text(*_targets(path, tool_of, _positions_of(parts[0])[1]), job.options.fanuc_config))]
         return
     for index, part in enumerate(parts, start=1):
         part_name = common.part_name(name, index)
         body, moves = _positions_of(part)
         note = remarks(f"WorkCal part {index} of {name}, result sha256 {common.fingerprint(job)}")
         yield (common.part_path(job, index),
-               [_program(part_name, comment, note + body, positions_text(*_targets(path, tool_of, moves)))])
+               [_program(part_name, comment, note + body, positions_text(*_targets(path, tool_of, moves), job.options.fanuc_config))])
     calls = [f"CALL {common.part_name(name, i)} ;" for i in range(1, len(parts) + 1)]
     yield job.out, [_program(name, comment, head + calls, [])]
 
