@@ -227,7 +227,8 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
             break
         if again:  # another search came back to the same pose: the search is not what falls short
             break
-        if result.coverage < options.get("min_coverage", MatchOptions.min_coverage) <= GOOD_FITNESS[role] <= result.fitness:
+        too_small = result.coverage < options.get("min_coverage", MatchOptions.min_coverage)
+        if too_small and result.fitness >= GOOD_FITNESS[role]:
             break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
     return best
 
@@ -315,8 +316,9 @@ def _up_side(points, inliers, centre, normal, band: float, spacing: float) -> fl
     that the platform's side faces do not count), are the objects standing on it: seen from the
     scanner's side, the plane hides whatever lies under it.  The plane is a platform only when those
     points lie on one side (at least UP_SIDE_SHARE of them, and ALL_ON_ONE_SIDE of all the points off
-    it but those at its outline, where its own side faces show from a low view) and it holds up most of the objects (at least SUPPORTED_SHARE of the points off the plane lie
-    over its hull): the face of an object holds up nothing but itself, and other objects stand below it."""
+    it but those at its outline, where its own side faces show from a low view) and it holds up most
+    of the objects (at least SUPPORTED_SHARE of the points off the plane lie over its hull): the face
+    of an object holds up nothing but itself, and other objects stand below it."""
     from scipy.spatial import ConvexHull, QhullError
 
     u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])

@@ -103,7 +103,8 @@ class Scanner:
         cols, rows = self.image_size
         if raycast.works() if cast_rays is None else cast_rays:
             pixel = np.arange(rows * cols)
-            depth, tri = raycast.cast(vertices, triangles[facing], np.zeros(3), self.ray_directions(*np.divmod(pixel, cols)))
+            directions = self.ray_directions(*np.divmod(pixel, cols))
+            depth, tri = raycast.cast(vertices, triangles[facing], np.zeros(3), directions)
             pixel = np.flatnonzero(tri >= 0)
             tri, depth = tri[pixel], depth[pixel]  # directions have z = 1: the distance along them is the depth
         else:
