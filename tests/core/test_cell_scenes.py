@@ -4,7 +4,10 @@ simulate.cell with exact truth; every calibration uses automatic regions."""
 import numpy as np
 import pytest
 
-from workcal_wb.core import frames
+from workcal_wb.core import frames, pointops
+from workcal_wb.core.edges import centre_on_edges
+from workcal_wb.core.regions import find_platform
+from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.benchmark.cases import random_motion
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.simulate.cell import CellSpec, cell_scan
@@ -46,13 +49,20 @@ def test_a_whole_scene_moved_by_any_rigid_motion_calibrates_to_the_same_W():
         assert again.status == "ok" and rotation < 0.01 and displacement < 0.01, (rotation, displacement)
 
 
-@pytest.mark.parametrize("layout, seed", [("touching", 0), ("bridge", 0)])
-def test_touching_or_bridged_objects_are_split_by_their_models(layout, seed):
+@pytest.mark.parametrize("layout, seed, frame, statuses", [
+    ("touching", 0, "sensor", ("ok",)), ("bridge", 0, "sensor", ("ok",)),
+    ("touching", 1, "arbitrary", ("ok", "ambiguous")), ("touching", 4, "arbitrary", ("ok", "ambiguous"))])
+def test_touching_or_bridged_objects_are_split_by_their_models(layout, seed, frame, statuses):
     """Failure 2 of the issue: touching objects (or clay joining them) fall into one cluster, which
-    neither model explained, so neither was found."""
-    cell = cell_scan(CellSpec(layout=layout, seed=seed))
+    neither model explained, so neither was found.  Seeds 1 and 4: the L-block placed through the
+    platform explained one arm of the pair and passed for the reference (found 120 and 180 deg off;
+    now such a pose locates nothing); then the block, partly hidden by the workpiece, was called
+    free to slide (few points lie along its edges) or its surface "went on past its outline" on faces
+    seen grazing (see visibility.evidence).  With 2 bootstrap refits the outline test may still find
+    3 % there (its limit): ambiguous is allowed, a wrong W or region is not."""
+    cell = cell_scan(CellSpec(layout=layout, seed=seed, frame=frame))
     result = _calibrated(cell)
-    assert result.status == "ok", result.reasons
+    assert result.status in statuses, result.reasons
     rotation, displacement = _errors(result.W, cell.W, cell.workpiece_model)
     assert rotation < 0.05 and displacement < 0.1
     assert any("touches another object" in w for w in result.warnings)
@@ -85,3 +95,40 @@ def test_platform_contact_rules_out_rivals_and_a_tie_nothing_breaks_stays_ambigu
     assert result.status == "ambiguous"
     assert any("ruled out by platform contact: it sinks" in c for c in result.reference.constraints)
     assert any("to break the tie, scan again from where" in r for r in result.reasons), result.reasons
+
+
+def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():
+    """Seen 22 deg above the table, the platform's own front face lies under its plane: it was counted
+    as objects below the plane, so no plane was a platform and the reference region took table points."""
+    cell = cell_scan(CellSpec(azimuth_deg=89.0, elevation_deg=22.0, frame="arbitrary", seed=1))
+    points = cell.cloud.points
+    platform = find_platform(points, pointops.median_spacing(points, seed=0), np.random.default_rng(0))
+    assert platform is not None and platform.up @ cell.up > 0.999
+    below_top = cell.mask("platform") & (platform.height(points) < -platform.band)
+    assert below_top.sum() > 1000  # the side face is in the scan
+    assert platform.below[cell.mask("platform")].mean() > 0.95
+    assert platform.below[cell.mask("reference")].mean() < 0.03
+
+
+def test_a_block_partly_hidden_by_the_workpiece_it_touches_is_held_by_its_edges():
+    """Where few scan points lie along the block's edges, sliding it 0.6 mm pushed too few of them off
+    to stand above the count's jitter, and the slide was called free (under-constrained)."""
+    cell = cell_scan(CellSpec(layout="touching", frame="arbitrary", seed=1))
+    surface = SurfaceModel(cell.reference_model, 0)
+    points = cell.cloud.points[cell.mask("reference")]
+    T = frames.invert(cell.V)
+    centred, stability = centre_on_edges(points, surface, T, gate=1.0, sigma=0.066, tolerance_mm=0.3)
+    assert stability["constrained"] and stability["held_by_edges"], stability
+    assert np.linalg.norm(centred[:3, 3] - T[:3, 3]) < 0.1
+
+
+def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_ok():
+    """Clay joining the objects, seen so that the L-block turned half round stands on the platform and
+    explains 2285 of its 3077 points: that pose was reported ok, 180 deg off.  The points of the
+    joined objects on neither model (1090) say the split may be wrong."""
+    cell = cell_scan(CellSpec(layout="bridge", frame="arbitrary", seed=1003))
+    result = _calibrated(cell, seed=1)  # as the scenes table's second seed set ran it
+    if result.status == "ok":
+        assert _errors(result.W, cell.W, cell.workpiece_model)[1] < 0.3
+    else:
+        assert any("lie on neither placed model" in r for r in result.reasons), result.reasons

@@ -589,12 +589,13 @@ class Judge:
         weights = np.clip(1 - (r / self.gate) ** 2, 0, 1)
         if self.view is None:
             return visibility.Evidence(weights, 0, 0, int((weights > 0).sum()))
+        on_model = weights > 0
         weights[visibility.facing(self.sample, self.surface.normals[idx] @ T[:3, :3], self.viewpoint)
                 <= visibility.FACING_COS] = 0.0
         samples = self.view_samples
         return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
                                    self.surface.normals[samples] @ T[:3, :3], self.gate, self.gate + 2 * self.pixel,
-                                   OFF_BAND_GATES * self.gate)
+                                   OFF_BAND_GATES * self.gate, on_model)
 
     def wall_thickness(self, T: np.ndarray, evidence: visibility.Evidence) -> float:
         """Median thickness of the part where pose T explains the view (mm; inf without a view)."""

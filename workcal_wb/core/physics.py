@@ -37,6 +37,16 @@ DEPTH_MARGIN_MM, DEPTH_PIXELS = 5.0, 2.0
 MIN_PIXELS, MIN_SHARE = 25, 0.1
 
 
+def contact(platform, surface: SurfaceModel, U: np.ndarray) -> float:
+    """Height of the model's lowest point, placed by U, above the platform (mm; negative: below it)."""
+    return float(platform.height(frames.apply(U, surface.points)).min())
+
+
+def sinks(platform, surface: SurfaceModel, U: np.ndarray) -> bool:
+    """Whether the model placed by U reaches through the platform (None: no platform, nothing sinks)."""
+    return platform is not None and contact(platform, surface, U) < -CONTACT_BANDS * platform.band
+
+
 @dataclass
 class Scene:
     """What the whole scan says beyond a match's region: all its points, the platform (or None), and
@@ -47,10 +57,6 @@ class Scene:
     platform: object | None = None  # regions.Platform
     sensors: np.ndarray | None = None
     sensor_of: np.ndarray | None = None
-
-    def contact(self, surface: SurfaceModel, U: np.ndarray) -> float:
-        """Height of the placed model's lowest point above the platform (mm; negative: below it)."""
-        return float(self.platform.height(frames.apply(U, surface.points)).min())
 
     def free_space(self, surface: SurfaceModel, U: np.ndarray, viewpoint: np.ndarray | None) -> dict:
         """View pixels where the placed model contradicts the rays: seen through (scan points behind
@@ -156,7 +162,7 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
 def _check(surface, scene: Scene, U, viewpoint) -> dict:
     out = {"sinks": False, "floats": False, "height": 0.0, "free": None}
     if scene.platform is not None:
-        height = scene.contact(surface, U)
+        height = contact(scene.platform, surface, U)
         tolerance = CONTACT_BANDS * scene.platform.band
         out.update(height=height, sinks=height < -tolerance, floats=height > tolerance)
     if scene.sensors is not None or viewpoint is not None:

@@ -14,7 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from . import frames, pointops
+from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
 from .match import MatchOptions, match
@@ -51,14 +51,20 @@ TOUCHING_SHARE = 0.9
 # tolerance for an ellipsoid or the L-block on a car; fitness 0.36-0.86 for flipped L-block poses).
 MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": 50.0}
 MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
-# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted.
+# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
+# unless a search comes back to a pose it found before (within these limits).
 SEARCH_ATTEMPTS = 3
+SAME_POSE_DEG, SAME_POSE_DIAGONALS = 1.0, 0.01
 GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
 # Where the reference touches something, its region keeps only points this close to its surface: this
 # many times the scan's noise, and at least MIN_ON_SURFACE_MM.
 ON_SURFACE_NOISES, MIN_ON_SURFACE_MM = 5.0, 0.5
 # A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
 MIN_FITNESS_OF_CLUSTER = 0.05
+# Where objects touch, the points of their clusters on neither placed model (clay joining them, points
+# at the contact) stay under this share of the reference region's (measured: 2-8 % on right splits,
+# about 50 % where a wrong pose explained one arm of the L-block).
+UNEXPLAINED_SHARE = 0.25
 
 
 @dataclass
@@ -115,7 +121,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     report = progress or (lambda fraction, message: None)
     surfaces = {"reference": reference, "workpiece": workpiece}
     near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
-    context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm,
+    context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
                                                            blas_threads=blas_threads,
@@ -147,26 +153,44 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
                                               (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
                         f"scan was split between the placed models; each region is only the points nearer its model")
+        left = _unexplained(points, objects, spacing, workpiece_idx, reference_idx)
+        if left > UNEXPLAINED_SHARE * len(reference_idx) and reference_match.status == OK:
+            reference_match.status = AMBIGUOUS
+            reference_match.reasons.append(
+                f"{left} points of the objects that touch lie on neither placed model (more than "
+                f"{UNEXPLAINED_SHARE:.0%} of the reference's {len(reference_idx)}): the models may split them wrongly "
+                "(a pose that fits part of the reference); scan the objects apart, or give the regions")
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform)
+
+
+def _unexplained(points, objects, spacing: float, *regions) -> int:
+    """How many points of the clusters the regions lie in belong to none of them."""
+    labels = _clusters(points[objects], LINK_SPACINGS * spacing)
+    taken = np.isin(objects, np.concatenate(regions))
+    involved = np.isin(labels, np.unique(labels[taken]))
+    return int(np.count_nonzero(involved & ~taken))
 
 
 def _rank(found: dict) -> int:
     return sum(match.status == OK for match, _, _ in found.values())
 
 
-def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, tolerance_mm, options) -> dict:
+def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, platform, tolerance_mm,
+             options) -> dict:
     """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
-    ones before left: a cluster the model explains only in part is split (see _on_model)."""
+    ones before left: a cluster the model explains only in part is split (see _on_model).  A pose
+    that sinks the model through the ``platform`` locates nothing (objects stand on it)."""
     found, left = {}, objects
     for step, role in enumerate(order):
         surface = surfaces[role]
         report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
         labels = _clusters(points[left], LINK_SPACINGS * spacing)
-        result, rejected = _first_match(scan, points, left, labels, surface, options, role, near_mm[role])
+        stands = (lambda U, s=surface: not physics.sinks(platform, s, U))
+        result, rejected, sunk = _first_match(scan, points, left, labels, surface, options, role, near_mm[role], stands)
         if result is None:
             what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
             raise NotFound(f"{what}: not found in {scan.name}: "
-                           + _why_not_found(points, left, labels, surface, rejected, tolerance_mm, role))
+                           + _why_not_found(points, left, labels, surface, rejected, tolerance_mm, role, sunk))
         on = _on_model(points[left], labels, surface, result.matrix, near_mm[role])
         # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
         region = on.clusters if role == "workpiece" and not on.touching else on.region
@@ -186,18 +210,38 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
     return again
 
 
-def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str) -> MatchResult:
+def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None) -> MatchResult:
     """Match, and when the pose does not explain the region, search again with other seeds and keep
     the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
-    nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers."""
+    nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers.
+    ``stands(U)``, when given, says whether a pose is physically possible; a possible pose beats any
+    impossible one."""
+    def rank(result):
+        possible = result.matrix is not None and (stands is None or stands(result.matrix))
+        return result.status != FAILED, possible, result.fitness
+
     best = None
     for attempt in range(SEARCH_ATTEMPTS):
         result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
-        if best is None or (result.status != FAILED, result.fitness) > (best.status != FAILED, best.fitness):
+        again = best is not None and _same_pose(result, best, surface)
+        if best is None or rank(result) > rank(best):
             best = result
-        if best.ok and best.fitness >= GOOD_FITNESS[role]:
+        if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
             break
+        if again:  # another search came back to the same pose: the search is not what falls short
+            break
+        too_small = result.coverage < options.get("min_coverage", MatchOptions.min_coverage)
+        if too_small and result.fitness >= GOOD_FITNESS[role]:
+            break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
     return best
+
+
+def _same_pose(first: MatchResult, second: MatchResult, surface: SurfaceModel) -> bool:
+    """Whether two matches placed the model alike (within SAME_POSE_DEG and SAME_POSE_DIAGONALS)."""
+    if first.matrix is None or second.matrix is None:
+        return False
+    return (frames.rotation_between_deg(first.matrix, second.matrix) < SAME_POSE_DEG
+            and np.linalg.norm(first.matrix[:3, 3] - second.matrix[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
 
 
 @dataclass
@@ -275,8 +319,9 @@ def _up_side(points, inliers, centre, normal, band: float, spacing: float) -> fl
     that the platform's side faces do not count), are the objects standing on it: seen from the
     scanner's side, the plane hides whatever lies under it.  The plane is a platform only when those
     points lie on one side (at least UP_SIDE_SHARE of them, and ALL_ON_ONE_SIDE of all the points off
-    it) and it holds up most of the objects (at least SUPPORTED_SHARE of the points off the plane lie
-    over its hull): the face of an object holds up nothing but itself, and other objects stand below it."""
+    it but those at its outline, where its own side faces show from a low view) and it holds up most
+    of the objects (at least SUPPORTED_SHARE of the points off the plane lie over its hull): the face
+    of an object holds up nothing but itself, and other objects stand below it."""
     from scipy.spatial import ConvexHull, QhullError
 
     u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -289,15 +334,18 @@ def _up_side(points, inliers, centre, normal, band: float, spacing: float) -> fl
     height = (points - centre) @ normal
     off = np.abs(height) > band
     flat = (points[off] - centre) @ axes.T
-    reach = flat @ hull.equations[:, :2].T + hull.equations[:, 2]  # <= 0 inside each edge
-    over = reach.max(axis=1) <= 0
-    inside = reach.max(axis=1) <= -max(HULL_MARGIN_MM, HULL_MARGIN_SPACINGS * spacing)
+    reach = (flat @ hull.equations[:, :2].T + hull.equations[:, 2]).max(axis=1)  # <= 0 inside every edge
+    margin = max(HULL_MARGIN_MM, HULL_MARGIN_SPACINGS * spacing)
+    over, inside = reach <= 0, reach <= -margin
+    # The platform's own side faces (seen from a low view) lie under its outline: they take no side.
+    rim = np.abs(reach) < margin
     above = int(np.count_nonzero(height[off][inside] > 0))
     below = int(np.count_nonzero(inside)) - above
     side = 1.0 if above > below else -1.0
     if max(above, below) < MIN_CLUSTER_POINTS or over.mean() < SUPPORTED_SHARE:
         return 0.0
-    if max(above, below) < UP_SIDE_SHARE * (above + below) or np.mean(side * height[off] > 0) < ALL_ON_ONE_SIDE:
+    if (max(above, below) < UP_SIDE_SHARE * (above + below)
+            or np.mean(side * height[off][~rim] > 0) < ALL_ON_ONE_SIDE):
         return 0.0
     return side
 
@@ -336,16 +384,23 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
     return [members for *_, members in sorted(alike, key=lambda item: item[:2]) + sorted(larger, key=lambda i: i[:2])]
 
 
-def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float):
-    """Match the model against its candidate clusters in turn; the first trustworthy match wins.
+def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float,
+                 stands):
+    """Match the model against its candidate clusters in turn; the first trustworthy match wins: one
+    whose pose ``stands(U)`` (a pose through the platform fits one arm of a touching pair, not the object).
 
     A cluster the placed model explains only in part (it holds more: objects touching) is split: the
     match is judged again on the points near the placed model alone.  Returns (the match or None, the
-    best match rejected for its share of points within the tolerance or None): a rejected match that
-    explains its cluster says the tolerance is below the noise."""
-    fallback, rejected = None, None
+    best match rejected for its share of points within the tolerance or None, whether a pose was
+    rejected for sinking through the platform): a rejected match that explains its cluster says the
+    tolerance is below the noise."""
+    fallback, rejected, sunk = None, None, False
     for members in _candidates(points, idx, labels, surface):
-        result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role)
+        result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
+                               stands)
+        if result.matrix is not None and not stands(result.matrix):
+            sunk = True
+            continue
         if result.matrix is not None and result.fitness < MIN_FITNESS[role]:
             near = _near(points[members], surface, result.matrix, near_mm)
             if near.sum() < MIN_CLUSTER_POINTS:
@@ -359,14 +414,16 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
                 rejected = result
             continue
         if result.ok:
-            return result, rejected
+            return result, rejected, sunk
         if result.status != FAILED and fallback is None:
             fallback = result
-    return fallback, rejected
+    return fallback, rejected, sunk
 
 
-def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, tolerance_mm: float, role: str) -> str:
-    """Why no object matched the model, as far as the objects' sizes and the best rejected match tell."""
+def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, tolerance_mm: float, role: str,
+                   sunk: bool) -> str:
+    """Why no object matched the model, as far as the objects' sizes, the best rejected match and
+    poses through the platform tell."""
     if rejected is not None and rejected.noise_mm > tolerance_mm:
         said = [r for r in rejected.reasons if "own noise" in r]
         return f"the tolerance {tolerance_mm:g} mm is below the scan's noise: " + (said[0] if said else
@@ -384,6 +441,9 @@ def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, toleran
         shown = ", ".join(f"{size:.4g}" for size in sizes[:5])
         return (f"no object on the platform is the size of the model ({surface.diagonal:.4g} mm across; the objects "
                 f"are {shown} mm across): is the model in the unit it was read in?")
+    if sunk:
+        return ("the only poses that fit an object put the model through the platform; is it in view, and is its "
+                "model the right one?")
     return "no object of its size matches the model; is it in view, and is its model the right one?"
 
 

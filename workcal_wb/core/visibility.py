@@ -210,9 +210,10 @@ def _around(image: np.ndarray, kind: str) -> np.ndarray:
 
 
 def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, model_normals: np.ndarray,
-             gate: float, depth_margin: float, off_band: float) -> Evidence:
+             gate: float, depth_margin: float, off_band: float, on_model: np.ndarray | None = None) -> Evidence:
     """The evidence of one pose: ``weights`` (per scan point, in [0, 1]) say how well each scan point
-    lies on a model sample facing the viewpoint; ``model_points``/``model_normals`` are the model's
+    lies on a model sample facing the viewpoint; ``on_model`` (per scan point, default weights > 0)
+    whether it lies on the model's surface at all, facing or not; ``model_points``/``model_normals`` are the model's
     view samples placed in the scan's frame by the pose.  A scan pixel inside the model's outline
     whose points lie more than ``gate`` behind its surface, but less than ``off_band``, is off the
     model (see Evidence.off); in front of it they may be an occluder.
@@ -221,7 +222,9 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     (over its whole 3 x 3 neighbourhood: the model would hide it), an empty footprint pixel with no
     scan point next to it where the model faces the sensor (missing), and a scan pixel just past the
     model's outline whose points lie on the plane of a flat model face ending there (the scanned
-    face goes on where the model's ends: a misplaced outline).
+    face goes on where the model's ends: a misplaced outline), unless they lie on the model itself (a
+    face seen grazing from the real sensor may turn away from an estimated viewpoint, and the
+    z-buffer of samples leaves such a face's pixels empty).
     """
     view = scan.view
     rows, cols = view.shape
@@ -247,7 +250,10 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     missing = (~near) & model_there & (cos > MISSING_COS)
     cells[missing] = MISSING
     flat = _flat(index, model_normals, rows, cols)
+    on = (weights > 0) if on_model is None else on_model
+    on_there = np.bincount(scan.pixel[inside], on[inside], minlength=rows * cols) > 0.5 * count
     continued = _continued(scan, cells, index, (cos > MISSING_COS) & flat, model_points, model_normals, depth_margin)
+    continued &= ~on_there
     cells[continued] = MISSING
     outline = model_there & ~_around(model_there.reshape(rows, cols), "all").ravel()
     # Off the model: scan pixels inside its outline whose points lie behind its surface, within the

@@ -1,4 +1,5 @@
-"""A structured-light range scanner like the paper's Minolta VI-700, rendering a Scene by z-buffer.
+"""A structured-light range scanner like the paper's Minolta VI-700, rendering a Scene by ray casting
+(open3d, where it works) or by our own z-buffer.
 
 The scanner frame S has its origin at the scanner, z along the viewing direction, x to the right
 and y down in the image.  Pixel (r, c) samples the ray through ((c - cx) k, (r - cy) k, 1) with
@@ -17,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import frames
+from .. import frames, raycast
 from ..errors import InputError
 from ..geometry import Cloud
 from ..pointops import triangle_normals_and_areas
@@ -87,8 +88,10 @@ class Scanner:
         return np.column_stack([(cols - 0.5 * (self.image_size[0] - 1)) * k,
                                 (rows - 0.5 * (self.image_size[1] - 1)) * k, np.ones(len(rows))])
 
-    def scan(self, scene, normals: bool = False) -> "ScanResult":
-        """One capture of the scene: points in S (mm) labelled with the index of the object they lie on."""
+    def scan(self, scene, normals: bool = False, cast_rays: bool | None = None) -> "ScanResult":
+        """One capture of the scene: points in S (mm) labelled with the index of the object they lie on.
+        ``cast_rays``: find each pixel's surface by open3d's ray casting (True), by our z-buffer
+        (False), or by ray casting where it works (None; see raycast)."""
         started = time.perf_counter()
         B_S = self.frame()
         vertices, triangles, owner = _all_triangles_in(scene, frames.invert(B_S))
@@ -97,20 +100,27 @@ class Scanner:
         # Closed outward meshes: only faces turned towards the scanner can be seen or hide anything.
         facing = np.flatnonzero((np.einsum("ij,ij->i", face_normals, corners[:, 0]) < 0)
                                 & (corners[:, :, 2].min(axis=1) > _NEAR_MM))
-        corners = corners[facing]
-        k = self.pixel_pitch_mm / self.focus_distance_mm
-        image_centre = 0.5 * (np.array(self.image_size, dtype=float) - 1)
         cols, rows = self.image_size
-        pixel, tri, inverse_depth = front_triangles(corners[:, :, :2] / corners[:, :, 2:] / k + image_centre,
-                                                    1.0 / corners[:, :, 2], (rows, cols))
+        if raycast.works() if cast_rays is None else cast_rays:
+            pixel = np.arange(rows * cols)
+            directions = self.ray_directions(*np.divmod(pixel, cols))
+            depth, tri = raycast.cast(vertices, triangles[facing], np.zeros(3), directions)
+            pixel = np.flatnonzero(tri >= 0)
+            tri, depth = tri[pixel], depth[pixel]  # directions have z = 1: the distance along them is the depth
+        else:
+            corners = corners[facing]
+            k = self.pixel_pitch_mm / self.focus_distance_mm
+            image_centre = 0.5 * (np.array(self.image_size, dtype=float) - 1)
+            pixel, tri, inverse_depth = front_triangles(corners[:, :, :2] / corners[:, :, 2:] / k + image_centre,
+                                                        1.0 / corners[:, :, 2], (rows, cols))
+            depth = 1.0 / inverse_depth
         tri = facing[tri]
         pixel_rows, pixel_cols = pixel // cols, pixel % cols
         direction = self.ray_directions(pixel_rows, pixel_cols)
         length = np.linalg.norm(direction, axis=1)
         cos_incidence = -np.einsum("ij,ij->i", face_normals[tri], direction) / length
         seen = cos_incidence >= np.cos(np.radians(self.max_incidence_deg))
-        direction, length, tri = direction[seen], length[seen], tri[seen]
-        depth = 1.0 / inverse_depth[seen]
+        direction, length, tri, depth = direction[seen], length[seen], tri[seen], depth[seen]
         rng = np.random.default_rng(self.seed)
         depth = depth + rng.normal(0.0, self.noise_sigma_mm, len(depth)) / length
         if self.z_resolution_mm > 0:
