@@ -100,6 +100,10 @@ MAX_SCATTER = 0.3
 # The view evidence: a scan point counts fully on the model surface and nothing at EVIDENCE_SIGMAS
 # times the residual scale (the larger of the best pose's and the scan's and model's own noise).
 EVIDENCE_SIGMAS = 3.0
+# The far-off test (see far_off_test): a scan point counts against a pose from EVIDENCE_SIGMAS
+# residual scales off its surface, fully from FAR_OFF_SIGMAS (further off is no further evidence: an
+# outlier is an outlier).
+FAR_OFF_SIGMAS = 10.0
 # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
 # samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
 PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
@@ -490,11 +494,38 @@ class Judge:
                 if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
-        judged = [{"T": p.T, "evidence": e,
-                   "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if i else 0.0,
-                   "other_side": bool(i) and self._from_the_other_side(poses[0].T, p.T)}
-                  for i, (p, e) in enumerate(zip(poses, weighed))]
+        best_distances = self._distances(poses[0].T)
+        judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False}]
+        for p, e in zip(poses[1:], weighed[1:]):
+            z, far_z = self._below(weighed[0], e, best_distances, p.T)
+            if self.options.method == "robust" and z < self.options.rival_significance <= far_z:
+                # About to be ruled out by its far-off points alone: first fit it as the best was
+                # fitted (a rival stopped short of its own best fit would lose unfairly).
+                p = polish(p)
+                e = self.evidence(p.T)
+                z, far_z = self._below(weighed[0], e, best_distances, p.T)
+            judged.append({"T": p.T, "evidence": e, "z": z, "far_z": far_z,
+                           "other_side": self._from_the_other_side(poses[0].T, p.T)})
         return poses[0], judged
+
+    def _below(self, best: visibility.Evidence, rival: visibility.Evidence, best_distances: np.ndarray,
+               T: np.ndarray) -> tuple[float, float]:
+        """How many standard errors a pose (scan -> model ``T``, its ``rival`` evidence) lies below
+        the best: by the view's cells, and by the scan points it leaves far off (far_off_test)."""
+        return (visibility.compare(best.cells, rival.cells, CELL_VARIANCE_FLOOR),
+                far_off_test(best_distances, self._distances(T), self.gate / EVIDENCE_SIGMAS))
+
+    def _distances(self, T: np.ndarray) -> np.ndarray:
+        """Each verdict point's distance from the model's surface under pose T (mm): exact against a
+        mesh; against a point model the point-to-plane residual, or the distance past the nearest
+        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach."""
+        moved = frames.apply(T, self.all_points)
+        if self.surface.is_mesh:
+            return self.surface.exact_distance(moved)
+        reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
+        d, idx, found = self.surface.nearest_cell(moved, reach)
+        plane = np.abs(self.surface.plane_residuals(moved, idx))
+        return np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
 
     def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
         """Whether the rival, seen from the side of the part its own matched surface faces, would
@@ -616,6 +647,31 @@ class Judge:
         return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
 
 
+def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
+    """How many standard errors the scan points a rival pose leaves far off the surface outweigh
+    those the best leaves: ``best`` and ``rival`` are each point's distance from the surface under
+    either pose (mm), ``sigma`` the residual scale (the scan's measured noise, or the fit's if larger).
+
+    The view cells (visibility.compare) count how many cells a pose explains; a flip that moves a
+    notch or a rim leaves only a few tens of points off, in too few cells to tell, but it leaves them
+    ten and more noises off, where noise puts no point.  Each point weighs a robust log-likelihood
+    ratio, a truncated quadratic in its distance beyond the noise band: w(u) = clip((u^2 - 3^2) /
+    (FAR_OFF_SIGMAS^2 - 3^2), 0, 1) for u = distance / sigma, so a point within EVIDENCE_SIGMAS of
+    the surface counts nothing (within the noise, a pose's small misfit must not decide), one
+    FAR_OFF_SIGMAS or more off counts fully, and no outlier counts more than that.  The per-point
+    differences d = w(rival) - w(best) are paired (one scan, both poses) and tested as a mean:
+    sum(d) / sqrt(sum((d - mean d)^2)).  Two poses that explain the scan alike (a symmetry, a view
+    that cannot tell) leave as many points off each way, so the statistic is about standard normal
+    (at most sqrt(n) for n points off one way only: 3 standard errors need at least 9 points all off
+    the rival).  Negative when the best leaves more far off."""
+    def weight(distance):
+        u2 = (distance / max(sigma, 1e-9)) ** 2
+        return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
+
+    d = weight(rival) - weight(best)
+    return float(d.sum() / np.sqrt(max(float(np.sum((d - d.mean()) ** 2)), 1e-12)))
+
+
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     """The pose refined again from WIDER_GATE times its gate on a few points: one stage at the
     wide gate, and only when that moved it, down to the fine gate again."""
@@ -686,8 +742,11 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
     status = FAILED if reasons else OK
     listed = _candidates(judged, surface, T)
-    rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
-              or c["from_the_other_side"]
+    significance = options.rival_significance
+    # A rival must be no worse than the best by the view's cells and by the points it leaves far off;
+    # a pose the far-off points find significantly better than the best is a rival whatever the view.
+    rivals = [c for c in listed[1:] if max(c["standard_errors_below_best"], c["far_off_standard_errors"]) < significance
+              or c["far_off_standard_errors"] <= -significance or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
         c["rival"] = True
@@ -708,8 +767,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
                        f"{r['rotation_from_best_deg']:.1f} deg away, scores {r['score_ratio']:.0%} of the best, only "
                        f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
-                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm): the part may be nearly symmetric; see "
-                       "candidates")
+                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm) and {r['far_off_standard_errors']:.1f} by "
+                       "the scan points it leaves far off the part: the part may be nearly symmetric; see candidates")
         ties.append(reasons[-1])
     if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
         reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
@@ -754,6 +813,7 @@ def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
         listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
                        "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
                        "standard_errors_below_best": float(entry["z"]),
+                       "far_off_standard_errors": float(entry["far_z"]),
                        "from_the_other_side": entry["other_side"],
                        "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
