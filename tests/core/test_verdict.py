@@ -181,3 +181,4 @@ def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
     result = match(Cloud(points[on_flip]), surface)
     assert result.status == "ambiguous", result.reasons
     assert any("clearly different pose" in r or "other side" in r for r in result.reasons), result.reasons
+

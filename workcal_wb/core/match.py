@@ -5,14 +5,17 @@ complete surface: every scan point of the part has a true mate on it and clutter
 result reports U = (scan -> model)^-1.
 
 The search compares poses by how many scan points they put on the model (weighted by closeness),
-never by the fraction of the scan: clutter around the part dilutes every pose alike.  The verdict
+never by the fraction of the scan: clutter around the part dilutes every pose alike.  When the best
+pose it finds does not fit the scan within the verdict's limit, it searches once more with more
+hypotheses (only such scans pay for it).  The verdict
 then judges the best pose and its rivals (other poses of the search, and the model's near-symmetric
 turns, always tried) by what the sensor should have seen from each (visibility.py): scan points on
 the model's visible surface count for a pose, scan points it would hide and model surface missing
 from the scan count against it.  A pose is "ok" only when it explains the scan to within the scan's
 own noise, which must not exceed the tolerance, covers a real part of the model, leaves no large
 share of the view contradicted, pins every motion, and no rival is within the statistical noise of
-its evidence (given the number of view cells and the measured noise); a model that is symmetric
+its evidence (given the number of view cells and the measured noise) nor of the scan points it
+leaves far off the part (far_off_test); a model that is symmetric
 (symmetry.py) makes every match ambiguous and the result names the symmetry.  Otherwise the match
 fails or is ambiguous and says why.
 """
@@ -71,6 +74,9 @@ MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 # RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
 # much as the best; the half turns of a symmetric model are also tried after refinement).
 CANDIDATE_FLOOR = 0.7
+# A search whose best pose does not fit the scan within the verdict's limit is run once more with
+# this many times the RANSAC hypotheses.
+RETRY_SAMPLES = 5
 # Steps of the final robust pass on all the fine points, from a pose already within their noise.
 POLISH_ITERATIONS = 2
 # The verdict refines the best pose again from this many times its final gate, on this many points,
@@ -198,6 +204,20 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
+    fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
+    if init is None and not best.sigma <= fit_limit:
+        # The search's best does not fit: its feature votes missed the pose (a scan that sees little
+        # of the model).  Search once more, drawing RETRY_SAMPLES times as many hypotheses; only
+        # such scans pay for it.  The better of the two explains more points within the limit, and
+        # the other stays a rival for the verdict to weigh.
+        with timer("search again"):
+            more = replace(options, ransac_samples=RETRY_SAMPLES * options.ransac_samples)
+            again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
+            if again:
+                retried, retried_rivals = _refine(options.method, again, medium, fine, surface, voxel / 2,
+                                                  options.tolerance_mm)
+                first, second = inlier_scores(medium, surface, [best.T, retried.T], fit_limit)
+                best, rivals = (retried, retried_rivals + [best]) if second > first else (best, rivals + [retried])
     with timer("verdict"):
         sample = fine[:VERDICT_POINTS]
         judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),

@@ -64,9 +64,10 @@ def dragon_scans(folder: Path = DRAGON_FOLDER) -> dict:
     return {name: (read_cloud(folder / name, units="m").points, pose) for name, pose in poses.items()}
 
 
-def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3) -> list[VerdictCase]:
+def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3, wanted: tuple = ()) -> list[VerdictCase]:
     """Each scan against the other 14 in the common frame (normals turned towards their scanner,
-    which sat on the +z side of each scan's own frame), moved into a frame of its own."""
+    which sat on the +z side of each scan's own frame), moved into a frame of its own.  ``wanted``
+    (case names), if given, keeps only those cases, as a full run makes them."""
     if not (folder / "dragonStandRight.conf").exists():
         return []
     scans = dragon_scans(folder)
@@ -77,14 +78,17 @@ def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 
     rng = np.random.default_rng(seed)
     cases = []
     for name, (points, pose) in scans.items():
+        motion = random_motion(rng)
+        case = f"dragon {name.removesuffix('.ply')}"
+        if wanted and case not in wanted:
+            continue
         others = [o for o in scans if o != name]
         common = np.vstack([frames.apply(scans[o][1], scans[o][0]) for o in others])
         common_normals = np.vstack([frames.apply_vectors(scans[o][1], normals[o]) for o in others])
         _, keep = pointops.voxel_downsample(common, DRAGON_MODEL_VOXEL_MM)
         model = Cloud(common[keep], common_normals[keep], name=f"dragon without {name}")
-        motion = random_motion(rng)
-        cases.append(VerdictCase(f"dragon {name.removesuffix('.ply')}", "dragon scans (real)",
-                                 frames.apply(motion, points), model, motion @ frames.invert(pose), tolerance_mm))
+        cases.append(VerdictCase(case, "dragon scans (real)", frames.apply(motion, points), model,
+                                 motion @ frames.invert(pose), tolerance_mm))
     return cases
 
 
