@@ -204,30 +204,40 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
+    sample = fine[:VERDICT_POINTS]
+
+    def judged(best, rivals):
+        """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
+        judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
+                      options, [])
+        return (judge, *judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
+                                   lambda state: _widened(state, medium, surface),
+                                   lambda state: _through_the_wall(state, medium, surface, gate)))
+
+    with timer("verdict"):
+        judge, chosen, ranking = judged(best, rivals)
     fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
-    if init is None and not best.sigma <= fit_limit:
-        # The search's best does not fit: its feature votes missed the pose (a scan that sees little
-        # of the model).  Search once more, drawing RETRY_SAMPLES times as many hypotheses; only
-        # such scans pay for it.  The better of the two explains more points within the limit, and
-        # the other stays a rival for the verdict to weigh.
+    if init is None and not chosen.sigma <= fit_limit:
+        # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
+        # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
+        # hypotheses (only such scans pay for it).  When its best explains more scan points within the
+        # limit, it is judged with its rivals and the first verdict's best (which won over the first
+        # search's rivals); otherwise the first verdict stands, as without the second search.
         with timer("search again"):
             more = replace(options, ransac_samples=RETRY_SAMPLES * options.ransac_samples)
             again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
             if again:
-                retried, retried_rivals = _refine(options.method, again, medium, fine, surface, voxel / 2,
+                retried, retried_rivals = _refine(options.method, again, medium, fine, surface, gate,
                                                   options.tolerance_mm)
-                first, second = inlier_scores(medium, surface, [best.T, retried.T], fit_limit)
-                best, rivals = (retried, retried_rivals + [best]) if second > first else (best, rivals + [retried])
+                first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
+        if again and second > first:
+            with timer("verdict"):
+                judge, chosen, ranking = judged(retried, [chosen] + retried_rivals)
+    result["warnings"] += judge.warnings
+    if pose_only:
+        return frames.invert(chosen.T)
     with timer("verdict"):
-        sample = fine[:VERDICT_POINTS]
-        judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
-                      options, result["warnings"])
-        best, judged = judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
-                                  lambda state: _widened(state, medium, surface),
-                                  lambda state: _through_the_wall(state, medium, surface, gate))
-        if pose_only:
-            return frames.invert(best.T)
-        return _verdict(scan, sample, surface, best, judged, judge, options, voxel, result, timer)
+        return _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel, result, timer)
 
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
@@ -514,26 +524,35 @@ class Judge:
                 if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
-        best_distances = self._distances(poses[0].T)
+        significance = self.options.rival_significance
         judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False}]
+        best_distances = None
         for p, e in zip(poses[1:], weighed[1:]):
-            z, far_z = self._below(weighed[0], e, best_distances, p.T)
-            if self.options.method == "robust" and z < self.options.rival_significance <= far_z:
-                # About to be ruled out by its far-off points alone: first fit it as the best was
-                # fitted (a rival stopped short of its own best fit would lose unfairly).
-                p = polish(p)
-                e = self.evidence(p.T)
-                z, far_z = self._below(weighed[0], e, best_distances, p.T)
+            z, far_z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR), None
+            if z < significance:  # a rival by the view: see whether the points it leaves far off rule it out
+                if best_distances is None:
+                    best_distances = self._distances(poses[0].T)
+                far_z = self._far_off(best_distances, p.T)
+                if self.options.method == "robust" and far_z >= significance:
+                    # About to be ruled out by its far-off points alone: first fit it as the best was
+                    # fitted (a rival stopped short of its own best fit would lose unfairly).
+                    p = polish(p)
+                    e = self.evidence(p.T)
+                    z, far_z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR), self._far_off(
+                        best_distances, p.T)
             judged.append({"T": p.T, "evidence": e, "z": z, "far_z": far_z,
                            "other_side": self._from_the_other_side(poses[0].T, p.T)})
+        if any(j["z"] < significance <= j["far_z"] for j in judged[1:] if j["far_z"] is not None):
+            # A rival ruled out by its far-off points alone: the other poses are checked by them too
+            # (one the far-off points find significantly better than the best keeps the match open).
+            for j in judged[1:]:
+                if j["far_z"] is None:
+                    j["far_z"] = self._far_off(best_distances, j["T"])
         return poses[0], judged
 
-    def _below(self, best: visibility.Evidence, rival: visibility.Evidence, best_distances: np.ndarray,
-               T: np.ndarray) -> tuple[float, float]:
-        """How many standard errors a pose (scan -> model ``T``, its ``rival`` evidence) lies below
-        the best: by the view's cells, and by the scan points it leaves far off (far_off_test)."""
-        return (visibility.compare(best.cells, rival.cells, CELL_VARIANCE_FLOOR),
-                far_off_test(best_distances, self._distances(T), self.gate / EVIDENCE_SIGMAS))
+    def _far_off(self, best_distances: np.ndarray, T: np.ndarray) -> float:
+        """far_off_test of pose T (scan -> model) against the best, whose distances are given."""
+        return far_off_test(best_distances, self._distances(T), self.gate / EVIDENCE_SIGMAS)
 
     def _distances(self, T: np.ndarray) -> np.ndarray:
         """Each verdict point's distance from the model's surface under pose T (mm): exact against a
@@ -765,8 +784,9 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     significance = options.rival_significance
     # A rival must be no worse than the best by the view's cells and by the points it leaves far off;
     # a pose the far-off points find significantly better than the best is a rival whatever the view.
-    rivals = [c for c in listed[1:] if max(c["standard_errors_below_best"], c["far_off_standard_errors"]) < significance
-              or c["far_off_standard_errors"] <= -significance or c["from_the_other_side"]
+    far = [np.nan if c["far_off_standard_errors"] is None else c["far_off_standard_errors"] for c in listed]
+    rivals = [c for c, f in zip(listed[1:], far[1:])
+              if (c["standard_errors_below_best"] < significance and not f >= significance) or f <= -significance or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
         c["rival"] = True
@@ -787,8 +807,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
                        f"{r['rotation_from_best_deg']:.1f} deg away, scores {r['score_ratio']:.0%} of the best, only "
                        f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
-                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm) and {r['far_off_standard_errors']:.1f} by "
-                       "the scan points it leaves far off the part: the part may be nearly symmetric; see candidates")
+                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}: the part may be "
+                       "nearly symmetric; see candidates")
         ties.append(reasons[-1])
     if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
         reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
@@ -823,6 +843,15 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), ties=ties, **result)
 
 
+def _far_off_words(candidate: dict) -> str:
+    """How a rival fares by the scan points it leaves far off, for its reason ("" when not tested)."""
+    far = candidate["far_off_standard_errors"]
+    if far is None:
+        return ""
+    return f", and {far:.1f} by the scan points it leaves far off the part" if far > -1 else (
+        f", and {-far:.1f} above it by the scan points it leaves far off the part")
+
+
 def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
     """The poses weighed, best first, as the result lists them (U of each and how it compares)."""
     best_score = judged[0]["evidence"].score
@@ -833,7 +862,7 @@ def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
         listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
                        "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
                        "standard_errors_below_best": float(entry["z"]),
-                       "far_off_standard_errors": float(entry["far_z"]),
+                       "far_off_standard_errors": None if entry["far_z"] is None else float(entry["far_z"]),
                        "from_the_other_side": entry["other_side"],
                        "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),

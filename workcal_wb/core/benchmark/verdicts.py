@@ -64,7 +64,8 @@ def dragon_scans(folder: Path = DRAGON_FOLDER) -> dict:
     return {name: (read_cloud(folder / name, units="m").points, pose) for name, pose in poses.items()}
 
 
-def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3, wanted: tuple = ()) -> list[VerdictCase]:
+def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3,
+                 wanted: tuple = ()) -> list[VerdictCase]:
     """Each scan against the other 14 in the common frame (normals turned towards their scanner,
     which sat on the +z side of each scan's own frame), moved into a frame of its own.  ``wanted``
     (case names), if given, keeps only those cases, as a full run makes them."""
@@ -131,7 +132,8 @@ def simulated_parts() -> dict:
             "boss plate (4-fold)": shapes.boss_plate()}
 
 
-def simulated_view(mesh: Cloud, rng: np.random.Generator, noise_mm: float, samples: int = 20000, scan: bool = True):
+def simulated_view(mesh: Cloud, rng: np.random.Generator, noise_mm: float, samples: int = 20000,
+                   scan: bool = True):
     """(scan points in a frame of their own, U): the mesh at a random pose, scanned alone from a
     random direction 400-900 mm away.  With ``scan=False`` only the random numbers are drawn (the
     same as a scan draws) and None is returned: the cases after it come out as in a full run."""
@@ -166,8 +168,8 @@ def simulated_cases(seed: int, views: int = VIEWS, wanted: tuple = ()) -> list[V
             noise = float(rng.uniform(*NOISE_RANGE_MM))
             add(f"{name} #{view}, {noise:.2f} mm noise", f"simulated {name}", mesh, noise, 0.3)
         for view, tolerance in enumerate((0.3, 2.5)):
-            add(f"{name} noisy #{view}, tol {tolerance:g}", f"simulated, {NOISY_MM:g} mm noise, tolerance {tolerance:g} mm",
-                mesh, NOISY_MM, tolerance, samples=40000)
+            add(f"{name} noisy #{view}, tol {tolerance:g}",
+                f"simulated, {NOISY_MM:g} mm noise, tolerance {tolerance:g} mm", mesh, NOISY_MM, tolerance, samples=40000)
     return cases
 
 
