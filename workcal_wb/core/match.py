@@ -5,19 +5,18 @@ complete surface: every scan point of the part has a true mate on it and clutter
 result reports U = (scan -> model)^-1.
 
 The search compares poses by how many scan points they put on the model (weighted by closeness),
-never by the fraction of the scan: clutter around the part dilutes every pose alike.  When the best
-pose it finds does not fit the scan within the verdict's limit, it searches once more with more
-hypotheses (only such scans pay for it).  The verdict
+never by the fraction of the scan: clutter around the part dilutes every pose alike.  The verdict
 then judges the best pose and its rivals (other poses of the search, and the model's near-symmetric
 turns, always tried) by what the sensor should have seen from each (visibility.py): scan points on
 the model's visible surface count for a pose, scan points it would hide and model surface missing
-from the scan count against it.  A pose is "ok" only when it explains the scan to within the scan's
-own noise, which must not exceed the tolerance, covers a real part of the model, leaves no large
-share of the view contradicted, pins every motion, and no rival is within the statistical noise of
-its evidence (given the number of view cells and the measured noise) nor of the scan points it
-leaves far off the part (far_off_test); a model that is symmetric
-(symmetry.py) makes every match ambiguous and the result names the symmetry.  Otherwise the match
-fails or is ambiguous and says why.
+from the scan count against it.  When the verdict's best does not fit the scan within its limit,
+the search runs once more with more hypotheses (only such scans pay for it).  A pose is "ok" only
+when it explains the scan to within the scan's own noise, which must not exceed the tolerance,
+covers a real part of the model, leaves no large share of the view contradicted, pins every
+motion, and no rival is within the statistical noise of its evidence (given the number of view
+cells and the measured noise) and of the scan points it leaves far off the part (far_off_test); a
+model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
+symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
 from __future__ import annotations
 
@@ -538,8 +537,8 @@ class Judge:
                     # fitted (a rival stopped short of its own best fit would lose unfairly).
                     p = polish(p)
                     e = self.evidence(p.T)
-                    z, far_z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR), self._far_off(
-                        best_distances, p.T)
+                    z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
+                    far_z = self._far_off(best_distances, p.T)
             judged.append({"T": p.T, "evidence": e, "z": z, "far_z": far_z,
                            "other_side": self._from_the_other_side(poses[0].T, p.T)})
         if any(j["z"] < significance <= j["far_z"] for j in judged[1:] if j["far_z"] is not None):
@@ -786,7 +785,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     # a pose the far-off points find significantly better than the best is a rival whatever the view.
     far = [np.nan if c["far_off_standard_errors"] is None else c["far_off_standard_errors"] for c in listed]
     rivals = [c for c, f in zip(listed[1:], far[1:])
-              if (c["standard_errors_below_best"] < significance and not f >= significance) or f <= -significance or c["from_the_other_side"]
+              if (c["standard_errors_below_best"] < significance and not f >= significance) or f <= -significance
+              or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
         c["rival"] = True
