@@ -106,6 +106,8 @@ def gather_inputs(scan, workpiece, reference, *, options: CalibrationOptions | N
     reference_cloud = model_cloud(reference, role="reference")
     picked = picked_regions(scan) if regions == "Picked" else None
     points = None if toolpath is None else toolpath_points(toolpath)
+    if prefs.get("KeepPreparedModels"):
+        KEPT.watch()
     labels = {"scan": label(scan), "workpiece": label(workpiece), "reference": label(reference),
               "toolpath": "" if toolpath is None else source_label(toolpath)}
     return Inputs(scan_points, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels,

@@ -52,11 +52,11 @@ class PreparedModels:
 
     def model(self, source: tuple | None, cloud: Cloud, seed: int, folder: Path | None) -> tuple[SurfaceModel, ModelCache]:
         """``cloud`` prepared, and the ModelCache to ``store()`` after the run.  Kept for ``source``
-        (document name, object name) unless ``folder`` is None (the preference is off: nothing is
-        kept, and what was kept is released) or there is no source."""
+        (document name, object name) once ``watch`` was called, unless ``folder`` is None (the
+        preference is off: nothing is kept, and what was kept is released) or there is no source."""
         if folder is None:
             self.clear()
-        if folder is None or source is None:
+        if folder is None or source is None or self._observer is None:
             cache = ModelCache(folder)
             return cache.model(cloud, seed), cache
         key = cloud_key(cloud, seed)
@@ -67,7 +67,6 @@ class PreparedModels:
             return entry.surface, entry.cache
         cache = ModelCache(folder)
         surface = cache.model(cloud, seed)
-        self._watch()
         with self._lock:
             self._entries[source] = Entry(key, folder, surface, cache)
         return surface, cache
@@ -87,9 +86,10 @@ class PreparedModels:
         with self._lock:
             return list(self._entries)
 
-    def _watch(self) -> None:
-        """Observe the documents from the first model kept on (FreeCAD calls an observer for every
-        property change of every document: none while nothing was ever kept)."""
+    def watch(self) -> None:
+        """Observe the documents (from the main thread, as FreeCAD's signals are connected there), so
+        that models can be kept; once a session, when the first calibration's inputs are gathered
+        (FreeCAD calls an observer for every property change of every document: none before)."""
         if self._observer is None:
             self._observer = _Observer(self)
             FreeCAD.addDocumentObserver(self._observer)
