@@ -173,3 +173,23 @@ def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set):
     assert result.status == "ok", result.reasons
     assert right(surface, result.matrix, case.truth)
     assert "search again" in result.timings_s
+
+
+def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
+    """The verdicts' matches, one task per model, on two worker processes: the same rows, in the same
+    order, as one after the other here (the scenes' calibrations go through the same parallel.Runner,
+    whose pooled calibrations test_studies checks)."""
+    import numpy as np
+
+    from workcal_wb.core.benchmark.verdicts import VerdictCase, run, simulated_parts, simulated_view
+    from workcal_wb.core.parallel import Runner
+
+    parts = simulated_parts()
+    cases = []
+    for seed, name in enumerate(("rebated plate", "curved tile")):
+        points, truth = simulated_view(parts[name], np.random.default_rng(seed), 0.05, samples=3000)
+        cases.append(VerdictCase(name, name, points, parts[name], truth, 0.3))
+    serial = run(None, seed=0, log=lambda message: None, runner=Runner(workers=1), cases=cases)
+    pooled = run(None, seed=0, log=lambda message: None, runner=Runner(workers=2), cases=cases)
+    assert [r.case for r in serial] == [c.name for c in cases]
+    assert pooled == serial
