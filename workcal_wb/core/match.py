@@ -216,10 +216,11 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
     fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
-    if init is None and not chosen.sigma <= fit_limit:
+    if init is None and not chosen.sigma <= fit_limit and judge.scan_noise <= options.tolerance_mm:
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
         # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
-        # hypotheses (only such scans pay for it).  When its best explains more scan points within the
+        # hypotheses (only such scans pay for it; not one noisier than the tolerance, which fails
+        # whatever the pose).  When its best explains more scan points within the
         # limit, it is judged with its rivals and the first verdict's best (which won over the first
         # search's rivals); otherwise the first verdict stands, as without the second search.
         with timer("search again"):
