@@ -47,10 +47,11 @@ def test_report_files_are_written_and_self_contained(written):
     assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
     assert "http://" not in page and "https://" not in page and "<link" not in page and "<script" not in page
     sources = re.findall(r'src="([^"]*)"', page)
-    assert len(sources) >= 2  # the deviation map and its histogram
+    assert len(sources) >= 2  # the deviation map's two views
     for src in sources:
         assert src.startswith("data:image/png;base64,")
         assert base64.b64decode(src.split(",", 1)[1])[:8] == PNG
+    assert page.count('aria-label="deviation histogram"') == 1 and "<svg" in page  # drawn inline
     assert "Lump &lt;test&gt; &amp; report" in page  # text is escaped, not injected
 
 
