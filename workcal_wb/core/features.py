@@ -14,6 +14,8 @@ from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 BINS = 11
+# Pairs whose angles are computed at once (each pair's own arithmetic: the chunk changes no bit).
+PAIR_CHUNK = 1 << 15
 
 
 def fpfh(points: np.ndarray, normals: np.ndarray, radius: float, max_nn: int = 100) -> np.ndarray:
@@ -58,12 +60,15 @@ def _neighbours(points: np.ndarray, radius: float, max_nn: int):
 def _simple_histograms(points, normals, rows, cols, count) -> np.ndarray:
     """SPFH: per point, the histograms of the three Darboux-frame angles to each neighbour, each
     neighbour adding 100 / (neighbours) to one bin of each."""
-    f1, f2, f3 = _pair_features(points[rows], normals[rows], points[cols], normals[cols])
     bins = np.empty((len(rows), 3), np.int64)
-    # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
-    bins[:, 0] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
-    bins[:, 1] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
-    bins[:, 2] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
+    for start in range(0, len(rows), PAIR_CHUNK):  # a chunk of pairs at a time: their temporaries stay small
+        part = slice(start, start + PAIR_CHUNK)
+        i, j = rows[part], cols[part]
+        f1, f2, f3 = _pair_features(points[i], normals[i], points[j], normals[j])
+        # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
+        bins[part, 0] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
+        bins[part, 1] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
+        bins[part, 2] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
     bins += rows[:, None] * (3 * BINS) + BINS * np.arange(3)
     increment = 100.0 / np.maximum(count[rows], 1)
     return np.bincount(bins.ravel(), weights=np.repeat(increment, 3),
