@@ -28,8 +28,9 @@ MAX_GRID_CELLS = 16_000_000
 # A cell's stored value: 0 not yet looked up, -1 no sample within the bound, else sample index + 1.
 # Zero for "unknown" lets a grid start as np.zeros: pages of cells never looked up cost no memory.
 _UNKNOWN, _FAR = 0, -1
-# A grid keeps its cells in bricks of this many cells a side (BRICK^3 x 4 bytes each).
-BRICK = 8
+# A grid keeps its cells in bricks of BRICK = 2^BRICK_BITS cells a side (BRICK^3 x 4 bytes each).
+BRICK_BITS = 3
+BRICK = 1 << BRICK_BITS
 # Cells filled by one KD-tree query at most (bounds the temporary memory of a fill).
 FILL_CHUNK = 1 << 18
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
@@ -104,10 +105,10 @@ class NearestGrid:
         return cls(lo, np.ceil((hi - lo) / cell).astype(np.int64) + 1, cell, bound, tree)
 
     def _keys(self, ijk: np.ndarray) -> np.ndarray:
-        b = ijk // BRICK
-        brick = (b[:, 0] * self.bricks[1] + b[:, 1]) * self.bricks[2] + b[:, 2]
-        o = ijk % BRICK
-        return (brick * BRICK + o[:, 0]) * BRICK**2 + o[:, 1] * BRICK + o[:, 2]
+        i, j, k = ijk[:, 0], ijk[:, 1], ijk[:, 2]
+        brick = ((i >> BRICK_BITS) * self.bricks[1] + (j >> BRICK_BITS)) * self.bricks[2] + (k >> BRICK_BITS)
+        inner = BRICK - 1
+        return (brick << 3 * BRICK_BITS) | ((i & inner) << 2 * BRICK_BITS) | ((j & inner) << BRICK_BITS) | (k & inner)
 
     def _ijk(self, keys: np.ndarray) -> np.ndarray:
         brick, place = np.divmod(keys, BRICK**3)
@@ -126,8 +127,7 @@ class NearestGrid:
 
     def stored(self, keys: np.ndarray) -> np.ndarray:
         """What each cell holds: 0 not yet looked up, -1 no sample within the bound, else sample index + 1."""
-        brick, place = np.divmod(keys, BRICK**3)
-        return self._rows[self._brick_row[brick], place]
+        return self._rows[self._brick_row[keys >> 3 * BRICK_BITS], keys & (BRICK**3 - 1)]
 
     def _store(self, keys: np.ndarray, values: np.ndarray) -> None:
         brick, place = np.divmod(keys, BRICK**3)
