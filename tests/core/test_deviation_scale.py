@@ -9,7 +9,7 @@ from workcal_wb.core import frames
 from workcal_wb.core.deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, WITHIN, DeviationScale
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
-from workcal_wb.core import raster
+from workcal_wb.core import picture
 from workcal_wb.core.report import MODEL_GREY, deviation_views, legend_html, write_report
 from workcal_wb.core.result import CalibrationResult
 
@@ -17,7 +17,7 @@ TOL = 0.3
 
 
 def read_png(data: bytes) -> np.ndarray:
-    """The pixels of a PNG as raster.png writes it (8-bit RGB, every row unfiltered)."""
+    """The pixels of a PNG as picture.png writes it (8-bit RGB, every row unfiltered)."""
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     chunks, at = {}, 8
     while at < len(data):
@@ -68,16 +68,16 @@ def test_the_report_uses_the_same_colours(tmp_path):
     d = deviation_map(calibration, points, model)
     views = deviation_views(d, calibration, points, model, scale)
     assert [v["title"] for v in views] == ["view along the shortest axis", "view along the middle axis"]
-    expected = {tuple(c) for c in raster.to_bytes(scale.colours(d))}
-    lump = tuple(raster.to_bytes(scale.colours([0.8]))[0])
+    expected = {tuple(c) for c in picture.to_bytes(scale.colours(d))}
+    lump = tuple(picture.to_bytes(scale.colours([0.8]))[0])
     for view in views:
         image = read_png(view["png"])
         drawn = {tuple(c) for c in image.reshape(-1, 3)} - {(255, 255, 255), (200, 200, 200), (0, 0, 0),
-                                                            tuple(raster.to_bytes(MODEL_GREY))}
+                                                            tuple(picture.to_bytes(MODEL_GREY))}
         assert drawn <= expected and lump in drawn  # every point in its scale colour; the lump is seen
         assert view["scale_bar_mm"] in (10.0, 20.0)  # a round length, about a fifth of the 100 mm part
     legend = legend_html(scale)
-    assert "rgb({},{},{})".format(*raster.to_bytes(BEYOND_ADDED)) in legend and "+1.2" in legend
+    assert "rgb({},{},{})".format(*picture.to_bytes(BEYOND_ADDED)) in legend and "+1.2" in legend
     paths = write_report(calibration, tmp_path, workpiece_points=points, workpiece_model=model, deviation_scale=scale)
     data = json.loads(paths["json"].read_text())
     assert data["deviation"]["colour_scale"] == {"tolerance_mm": TOL, "limit_mm": 1.2}

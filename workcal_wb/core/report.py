@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import frames, raster
+from . import frames, picture
 from .atomic import atomic_write_text
 from .deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, DeviationScale, deviation_stats, signed_deviations
 from .errors import OutputError
@@ -152,7 +152,7 @@ def deviation_views(deviations, calibration, workpiece_points, workpiece_model, 
     outline = model_points if len(model_points) <= MAX_OUTLINE_POINTS else \
         model_points[rng.choice(len(model_points), MAX_OUTLINE_POINTS, False)]
     outline = (outline - centre) @ axes.T
-    colours = raster.to_bytes(scale.colours(d))
+    colours = picture.to_bytes(scale.colours(d))
     views = []
     for (h, v, depth), title in zip(((0, 1, 2), (0, 2, 1)), ("view along the shortest axis",
                                                              "view along the middle axis")):
@@ -164,14 +164,14 @@ def deviation_views(deviations, calibration, workpiece_points, workpiece_model, 
         if (h, v, depth) == (0, 2, 1):  # (x, z) seen along +y is a left-handed view: turn it around
             sign[h] *= -1
         seen, model = local * sign, outline * sign
-        view = raster.View(np.vstack([model[:, [h, v]], seen[:, [h, v]]]))
-        image = raster.canvas(view.width, view.height)
-        view.draw(image, model[:, [h, v]], raster.to_bytes(MODEL_GREY))
+        view = picture.View(np.vstack([model[:, [h, v]], seen[:, [h, v]]]))
+        image = picture.canvas(view.width, view.height)
+        view.draw(image, model[:, [h, v]], picture.to_bytes(MODEL_GREY))
         order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
         view.draw(image, seen[order][:, [h, v]], colours[order], dot=2)
-        raster.frame(image)
+        picture.frame(image)
         bar = view.scale_bar(image)
-        views.append({"title": title, "horizontal": h + 1, "vertical": v + 1, "png": raster.png(image),
+        views.append({"title": title, "horizontal": h + 1, "vertical": v + 1, "png": picture.png(image),
                       "scale_bar_mm": bar})
     return views
 
@@ -197,7 +197,7 @@ def histogram_svg(deviations, scale: DeviationScale) -> str:
     middles = 0.5 * (edges[1:] + edges[:-1])
     out = [f'<svg width="{width}" height="{height}" role="img" '
            'aria-label="deviation histogram" font-family="sans-serif" font-size="11">']
-    for count, left_edge, right_edge, colour in zip(counts, edges[:-1], edges[1:], raster.to_bytes(scale.colours(middles))):
+    for count, left_edge, right_edge, colour in zip(counts, edges[:-1], edges[1:], picture.to_bytes(scale.colours(middles))):
         if count:
             top_y = y(np.log10(count) + 1)
             out.append(f'<rect x="{x(left_edge):.1f}" y="{top_y:.1f}" width="{max(x(right_edge) - x(left_edge), 0.5):.1f}" '
@@ -225,7 +225,7 @@ def legend_html(scale: DeviationScale) -> str:
     """The map's colour scale as HTML: a gradient from -limit to +limit with its ticks, the colours
     past the limit and the grey of points with no model surface near them."""
     def rgb(colour):
-        return "rgb({},{},{})".format(*raster.to_bytes(colour))
+        return "rgb({},{},{})".format(*picture.to_bytes(colour))
 
     values = np.linspace(-scale.limit_mm, scale.limit_mm, 61)
     stops = ",".join(f"{rgb(c)} {100 * i / (len(values) - 1):.2f}%" for i, c in enumerate(scale.colours(values)))
