@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 BINS = 11
 # Pairs whose angles are computed at once (each pair's own arithmetic: the chunk changes no bit).
-PAIR_CHUNK = 1 << 15
+PAIR_CHUNK = 1 << 13
 
 
 def fpfh(points: np.ndarray, normals: np.ndarray, radius: float, max_nn: int = 100) -> np.ndarray:
