@@ -506,24 +506,29 @@
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="33"/>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="35"/>
         <location filename="../../workcal_wb/gui/progress.py" line="52"/>
         <source>WorkCal</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="34"/>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="36"/>
         <source>automatic (3 tolerances)</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="36"/>
-        <source>ask at the first import</source>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="38"/>
+        <source>Report folder</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="75"/>
-        <source>Report folder</source>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="41"/>
+        <source>Prepared models folder</source>
+        <translation type="unfinished"></translation>
+    </message>
+    <message>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="43"/>
+        <source>ask at the first import</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
@@ -752,32 +757,32 @@ Reference: {} points</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="145"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="150"/>
         <source>no document open</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="169"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="174"/>
         <source>no calibration in the document: run WorkCal &gt; Calibrate first</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="179"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="184"/>
         <source>Calibration not ok</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="180"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="185"/>
         <source>The calibration did not pass its quality gates.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="181"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="186"/>
         <source>Use it anyway? The result is marked FORCED; check the workpiece position by hand before running the program.</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/task_panels/common.py" line="201"/>
+        <location filename="../../workcal_wb/gui/task_panels/common.py" line="206"/>
         <source>using a calibration that did not pass its gates (FORCED)</source>
         <translation type="unfinished"></translation>
     </message>
@@ -1834,12 +1839,12 @@ Reference: {} points</source>
 <context>
     <name>WorkCal_Preferences</name>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="103"/>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="124"/>
         <source>Preferences...</source>
         <translation type="unfinished"></translation>
     </message>
     <message>
-        <location filename="../../workcal_wb/gui/commands/preferences.py" line="104"/>
+        <location filename="../../workcal_wb/gui/commands/preferences.py" line="125"/>
         <source>Default units, tolerance, matching method and export format</source>
         <translation type="unfinished"></translation>
     </message>

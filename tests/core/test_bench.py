@@ -150,3 +150,24 @@ def test_peers_read_the_files_workcal_writes(tmp_path):
     write_ply(tmp_path / "normals.ply", Cloud(points, normals=np.tile([0.0, 0.0, 1.0], (100, 1))))
     for name in ("mesh.ply", "normals.ply"):
         assert np.array_equal(read_vertices(tmp_path / name), points)
+
+
+
+def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
+    """The verdicts' matches, one task per model, on two worker processes: the same rows, in the same
+    order, as one after the other here (the scenes' calibrations go through the same parallel.Runner,
+    whose pooled calibrations test_studies checks)."""
+    import numpy as np
+
+    from workcal_wb.core.benchmark.verdicts import VerdictCase, run, simulated_parts, simulated_view
+    from workcal_wb.core.parallel import Runner
+
+    parts = simulated_parts()
+    cases = []
+    for seed, name in enumerate(("rebated plate", "curved tile")):
+        points, truth = simulated_view(parts[name], np.random.default_rng(seed), 0.05, samples=3000)
+        cases.append(VerdictCase(name, name, points, parts[name], truth, 0.3))
+    serial = run(None, seed=0, log=lambda message: None, runner=Runner(workers=1), cases=cases)
+    pooled = run(None, seed=0, log=lambda message: None, runner=Runner(workers=2), cases=cases)
+    assert [r.case for r in serial] == [c.name for c in cases]
+    assert pooled == serial

@@ -369,20 +369,34 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
 
 
 def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, monkeypatch):
-    """The models are prepared once and reused from the folder the preferences name (the user's cache
-    folder by default); turned off, nothing is kept.  The result is the same either way."""
+    """The models are prepared once: a second calibration in the session reuses the very same prepared
+    objects and reads no cache file; they are also kept in the folder the preferences name (the user's
+    cache folder by default) for the next session.  Turned off, nothing is kept, in memory or on disk.
+    The result is the same either way."""
     from workcal_wb.core import model_cache
     from workcal_wb.core.model_cache import SUFFIX, default_folder
     from workcal_wb.fc import inputs as fc_inputs
     from workcal_wb.fc import prefs
     from workcal_wb.fc.memo import LastResult
+    from workcal_wb.fc.prepared_models import KEPT
 
-    def run(inputs):  # without the last result remembered by the inputs' key, which would hide the cache
+    models, reads = [], []
+
+    def run(inputs):  # without the last result remembered by the inputs' key, which would hide the models
         monkeypatch.setattr(fc_inputs, "_last", LastResult())
+        models.clear()
         return fc_inputs.run(inputs)
 
     def gather():
         return fc_inputs.gather_inputs(objs["scan"], objs["workpiece"], objs["reference"])
+
+    def calibrate(scan, workpiece, reference, **kwargs):  # the prepared models the calibration is given
+        models.extend((workpiece, reference))
+        return original_calibrate(scan, workpiece, reference, **kwargs)
+
+    def read_entry(*args):
+        reads.append(args[0])
+        return original_read_entry(*args)
 
     doc, objs = document
     prepared = []
@@ -392,24 +406,35 @@ def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, 
             prepared.append(1)
             super().__init__(*args, **kwargs)
 
+    original_calibrate, original_read_entry = fc_inputs.calibrate, model_cache.read_entry
+    monkeypatch.setattr(fc_inputs, "calibrate", calibrate)
+    monkeypatch.setattr(model_cache, "read_entry", read_entry)
     monkeypatch.setattr(model_cache, "SurfaceModel", Counted)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     prefs.reset()
+    KEPT.clear()
     try:
         assert prefs.model_cache_folder() == default_folder() == tmp_path / "xdg" / "workcal" / "models"
         prefs.set("ModelCacheDir", str(tmp_path / "mine"))
         inputs = gather()
         assert inputs.model_cache == tmp_path / "mine"
         first = run(inputs)
+        first_models = list(models)
         kept = sorted((tmp_path / "mine").glob(f"*{SUFFIX}"))
         assert first.status == "ok" and len(kept) == 2 and len(prepared) == 2
+        reads.clear()
         again = run(gather())
-        assert len(prepared) == 2  # both models came from the folder
+        assert all(a is b for a, b in zip(models, first_models)) and len(models) == 2  # the very same objects
+        assert reads == [] and len(prepared) == 2  # no cache file read, nothing prepared
+        assert sorted(KEPT.sources()) == sorted((doc.Name, objs[r].Name) for r in ("workpiece", "reference"))
+        KEPT.clear()  # as in a new session: both models come from the folder
+        loaded = [surface for surface, _ in fc_inputs.prepare_models(gather())]
+        assert len(reads) == 2 and len(prepared) == 2 and not any(m is f for m, f in zip(loaded, first_models))
         prefs.set("KeepPreparedModels", 0)
         off = gather()
         assert off.model_cache is None
         fresh = run(off)
-        assert len(prepared) == 4
+        assert len(prepared) == 4 and KEPT.sources() == []
         for result in (again, fresh):
             assert np.array_equal(result.W, first.W) and result.status == first.status
         assert not (tmp_path / "xdg").exists() and sorted((tmp_path / "mine").glob(f"*{SUFFIX}")) == kept
@@ -420,3 +445,49 @@ def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, 
         assert blocked.status == "ok" and any("model cache" in w for w in blocked.warnings)
     finally:
         prefs.reset()
+        KEPT.clear()
+
+
+def test_prepared_models_live_as_long_as_their_objects(document, tmp_path, monkeypatch):
+    """A model kept in memory is released when its object changes (a new one is prepared), is
+    deleted, or its document is closed; a label change keeps it."""
+    import gc
+    import weakref
+
+    from workcal_wb.fc import inputs as fc_inputs
+    from workcal_wb.fc import prefs
+    from workcal_wb.fc.prepared_models import KEPT
+
+    doc, objs = document
+    workpiece, reference = objs["workpiece"], objs["reference"]
+    source = {role: (doc.Name, objs[role].Name) for role in ("workpiece", "reference")}
+
+    def prepare():
+        inputs = fc_inputs.gather_inputs(objs["scan"], workpiece, reference)
+        return [weakref.ref(surface) for surface, _ in fc_inputs.prepare_models(inputs)]
+
+    def dead(ref):
+        gc.collect()
+        return ref() is None
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    prefs.reset()
+    KEPT.clear()
+    try:
+        first_workpiece, first_reference = prepare()
+        workpiece.Label = "Workpiece renamed"
+        assert prepare() == [first_workpiece, first_reference]  # the same objects (weakrefs compare by them)
+        assert sorted(KEPT.sources()) == sorted(source.values())
+        moved = FreeCAD.Placement(workpiece.Placement)
+        moved.Base = moved.Base + FreeCAD.Vector(5, 0, 0)
+        workpiece.Placement = moved
+        assert KEPT.sources() == [source["reference"]] and dead(first_workpiece)  # changed: released
+        second_workpiece, reference_again = prepare()
+        assert reference_again == first_reference and second_workpiece() is not None
+        doc.removeObject(workpiece.Name)
+        assert KEPT.sources() == [source["reference"]] and dead(second_workpiece)  # deleted: released
+        FreeCAD.closeDocument(doc.Name)
+        assert KEPT.sources() == [] and dead(first_reference)  # document closed: released
+    finally:
+        prefs.reset()
+        KEPT.clear()

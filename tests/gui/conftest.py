@@ -7,6 +7,7 @@
 * ``view_driver``: synthetic mouse and key events sent through the real 3D view (Coin pixel positions).
 * ``pump(seconds)``: run the event loop for a while; ``settle()``: wait until the 3D view stops changing.
 * ``assert_ok_cancel(panel)``: the panel's standard buttons are OK and Cancel.
+* ``choose_folder(button, folder)``: click a Browse... button and answer its folder dialog.
 * ``shoot_window(name)``: the whole main window as the user sees it (panel, tree and 3D view) as a PNG.
 * ``clipped_texts(widget)``, ``horizontal_scroll(widget)``, ``view_share(points)``: what a step must get
   right at FreeCAD's default sizes: no text cut off, no sideways scrolling, the objects fill the view.
@@ -112,6 +113,30 @@ def assert_ok_cancel(panel) -> None:
     """The task panel asks FreeCAD for OK and Cancel in a form every PySide accepts (Qt6 flags are not ints)."""
     box = QtWidgets.QDialogButtonBox(panel.getStandardButtons())
     assert box.button(QtWidgets.QDialogButtonBox.Ok) and box.button(QtWidgets.QDialogButtonBox.Cancel)
+
+
+def choose_folder(button, folder) -> bool:
+    """Click ``button`` (a Browse... button) and answer the folder dialog it opens with ``folder``;
+    whether a dialog was answered."""
+    chosen = []
+
+    def answer():
+        dialog = QtWidgets.QApplication.activeModalWidget()
+        if isinstance(dialog, QtWidgets.QFileDialog):
+            dialog.setDirectory(str(folder))
+            chosen.append(True)
+            dialog.accept()
+        else:
+            QtCore.QTimer.singleShot(50, answer)
+
+    QtCore.QTimer.singleShot(50, answer)
+    button.click()
+    return bool(chosen)
+
+
+@pytest.fixture(name="choose_folder")
+def choose_folder_fixture():
+    return choose_folder
 
 
 @pytest.fixture(name="assert_ok_cancel")

@@ -464,7 +464,7 @@ def test_10_commands_registered_and_guarded(step, output_dir):
     assert len([o for o in doc.Objects if o.TypeId == "Points::FeaturePython"]) == count + 1
 
 
-def test_11_preferences_page(step, report, output_dir):
+def test_11_preferences_page(step, report, output_dir, choose_folder):
     from workcal_wb.fc import prefs
     from workcal_wb.fc.inputs import options_from
     from workcal_wb.gui.commands.preferences import PreferencePage
@@ -490,20 +490,8 @@ def test_11_preferences_page(step, report, output_dir):
     # "0" says what it means, and the report folder has a Browse button.
     assert page.form.deviationRange.value() == 0 and page.form.deviationRange.text().startswith("automatic")
     assert page.form.reportDir.placeholderText() and page.form.reportDirBrowse.text() == "Browse..."
-    chosen = []
-
-    def choose_folder():
-        dialog = QtWidgets.QApplication.activeModalWidget()
-        if isinstance(dialog, QtWidgets.QFileDialog):
-            dialog.setDirectory(str(output_dir))
-            chosen.append(True)
-            dialog.accept()
-        else:
-            QtCore.QTimer.singleShot(50, choose_folder)
-
-    QtCore.QTimer.singleShot(50, choose_folder)
-    page.form.reportDirBrowse.click()
-    assert chosen and os.path.samefile(page.form.reportDir.text(), str(output_dir))
+    assert choose_folder(page.form.reportDirBrowse, output_dir)
+    assert os.path.samefile(page.form.reportDir.text(), str(output_dir))
 
     saved = prefs.all_values()
     try:

@@ -78,6 +78,27 @@ def input_file(text: str) -> str:
     return text
 
 
+def add_runner_options(parser, what: str) -> None:
+    """--workers N / --scheduler ADDRESS: where a batch of ``what`` (e.g. "calibrations") runs
+    (core/parallel.py); ``runner_from(args)`` makes the Runner."""
+    from workcal_wb.core.parallel import cores
+
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=count, metavar="N",
+                       help=f"{what} run at once, each in its own process (default: every core, {cores()} "
+                            "here; 1: one after the other in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help=f"run the {what} on the Dask cluster whose scheduler listens at ADDRESS "
+                            "(e.g. tcp://10.0.0.5:8786; needs python3-distributed here and on the workers)")
+
+
+def runner_from(args):
+    """The parallel.Runner that --workers / --scheduler ask for."""
+    from workcal_wb.core.parallel import Runner
+
+    return Runner(args.workers, args.scheduler)
+
+
 def add_cache_options(parser) -> None:
     """--cache DIR / --no-cache: where prepared models are kept between runs (core/model_cache.py)."""
     from workcal_wb.core.model_cache import default_folder

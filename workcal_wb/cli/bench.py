@@ -5,7 +5,7 @@ import os
 from pathlib import Path
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import seed
+from workcal_wb.cli.arguments import add_runner_options, runner_from, seed
 from workcal_wb.core.outputs import check_file
 
 # The shared data (Stanford bunny scans) lives beside the checkout, as for the tests.
@@ -31,6 +31,7 @@ def add_parser(subparsers):
                         "any frame, touching objects, any view, calibrated with automatic regions; processes: the "
                         "match and calibrate commands as whole processes, cold and warm, beside the peers)")
     p.add_argument("--seed", type=seed, default=0, help="seed for the case generation and the matchers")
+    add_runner_options(p, "verdicts' and scenes' matches and calibrations")
     p.add_argument("--shared", metavar="DIR", type=Path,
                    default=Path(os.environ.get("WORKCAL_SHARED", DEFAULT_SHARED)),
                    help="folder holding data/stanford-bunny (default ../shared beside the checkout, or "
@@ -42,7 +43,8 @@ def run(args) -> int:
     from workcal_wb.core.benchmark.run import run as run_benchmark
 
     check_file(args.out)
-    report = run_benchmark(args.shared, Path(args.out), seed=args.seed, quick=args.quick, only=args.only)
+    report = run_benchmark(args.shared, Path(args.out), seed=args.seed, quick=args.quick, only=args.only,
+                           runner=runner_from(args))
     print(f"wrote {args.out}")
     for line in report.missed:
         print(f"target missed: {line}")

@@ -4,10 +4,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import count, positive, seed
+from workcal_wb.cli.arguments import add_runner_options, count, positive, runner_from, seed
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.outputs import check_folder
-from workcal_wb.core.parallel import Runner, cores
 
 CHOICES = ("repeatability", "placement", "point-count", "object-size", "all")
 
@@ -35,13 +34,7 @@ def add_parser(subparsers):
                    help="truth: the simulator's object masks, like the paper's hand-picked regions (default); "
                         "auto: calibrate finds the regions itself")
     p.add_argument("--tolerance", type=positive, default=0.3, metavar="MM", help="calibration tolerance (default 0.3 mm)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=count, metavar="N",
-                       help=f"calibrations run at once, each in its own process (default: every core, {cores()} "
-                            "here; 1: one after the other in this process)")
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="run the calibrations on the Dask cluster whose scheduler listens at ADDRESS "
-                            "(e.g. tcp://10.0.0.5:8786; needs python3-distributed here and on the workers)")
+    add_runner_options(p, "calibrations")
     p.add_argument("--report", action="store_true", help="also write studies.html with every study's figure")
     p.add_argument("--quiet", action="store_true", help="no line per calibration while running")
     return p
@@ -58,7 +51,7 @@ def run(args) -> int:
     out = Path(args.out)
     names = list(STUDIES) if args.study == "all" else [args.study]
     progress = None if args.quiet else (lambda message: print(f"  {message}", flush=True))
-    runner = Runner(args.workers, args.scheduler)
+    runner = runner_from(args)
     results = []
     for name in names:
         print(f"study {name}{' (quick)' if args.quick else ''}, calibrations {runner.describe()} ...", flush=True)

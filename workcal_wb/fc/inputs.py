@@ -18,11 +18,11 @@ import numpy as np
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
-from workcal_wb.core.model_cache import ModelCache
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.fc import prefs
 from workcal_wb.fc.memo import LastResult
 from workcal_wb.fc.models import model_cloud
+from workcal_wb.fc.prepared_models import KEPT, source_of
 from workcal_wb.fc.scan import get_regions, scan_cloud
 from workcal_wb.fc.toolpath import source_label, toolpath_points
 
@@ -41,6 +41,7 @@ class Inputs:
     toolpath_points: np.ndarray | None = None
     labels: dict = field(default_factory=dict)
     model_cache: Path | None = None  # where prepared models are kept (prefs.model_cache_folder); None: nowhere
+    sources: dict = field(default_factory=dict)  # role -> (document, object) the model came from (kept in memory)
 
     def key(self) -> str:
         """Fingerprint of the data and options: equal keys give the same calibration (the BLAS thread
@@ -105,13 +106,22 @@ def gather_inputs(scan, workpiece, reference, *, options: CalibrationOptions | N
     reference_cloud = model_cloud(reference, role="reference")
     picked = picked_regions(scan) if regions == "Picked" else None
     points = None if toolpath is None else toolpath_points(toolpath)
+    if prefs.get("KeepPreparedModels"):
+        KEPT.watch()
     labels = {"scan": label(scan), "workpiece": label(workpiece), "reference": label(reference),
               "toolpath": "" if toolpath is None else source_label(toolpath)}
     return Inputs(scan_points, workpiece_cloud, reference_cloud, options or options_from(), picked, points, labels,
-                  prefs.model_cache_folder())
+                  prefs.model_cache_folder(), {"workpiece": source_of(workpiece), "reference": source_of(reference)})
 
 
 _last = LastResult()
+
+
+def prepare_models(inputs: Inputs) -> list:
+    """[(SurfaceModel, ModelCache to store after the run)] of the workpiece and the reference: kept in
+    memory for their document objects, else from the cache folder, else prepared."""
+    return [KEPT.model(inputs.sources.get(role), cloud, inputs.options.seed, inputs.model_cache)
+            for role, cloud in (("workpiece", inputs.workpiece), ("reference", inputs.reference))]
 
 
 def run(inputs: Inputs, progress=None, blas_threads: int | None = 1) -> CalibrationResult:
@@ -119,18 +129,21 @@ def run(inputs: Inputs, progress=None, blas_threads: int | None = 1) -> Calibrat
 
     ``progress(fraction, message)`` may raise errors.Cancelled to stop; the exception propagates.
     ``blas_threads``: None from a worker thread inside FreeCAD (its GUI thread goes on using numpy).
-    The last result is remembered by the inputs' fingerprint; the models are prepared once and kept in
-    ``inputs.model_cache`` for later calibrations (also after a restart), and a folder that cannot be
-    written is a warning of the result."""
+    The last result is remembered by the inputs' fingerprint; the models are prepared once, kept in
+    memory as long as their document objects (``fc.prepared_models``) and in ``inputs.model_cache`` for
+    later sessions, and a folder that cannot be written is a warning of the result."""
     key = inputs.key()
     result = _last.get(key)
     if result is None:
-        cache = ModelCache(inputs.model_cache)
-        workpiece, reference = (cache.model(m, inputs.options.seed) for m in (inputs.workpiece, inputs.reference))
+        (workpiece, workpiece_cache), (reference, reference_cache) = prepare_models(inputs)
         result = calibrate(inputs.scan, workpiece, reference, regions=inputs.regions,
                            toolpath_points=inputs.toolpath_points,
                            options=replace(inputs.options, blas_threads=blas_threads), progress=progress)
-        cache.store()
-        result.warnings += cache.notes
+        notes = []
+        for cache in dict.fromkeys((workpiece_cache, reference_cache)):  # what this run added to the models
+            cache.store()
+            notes += cache.notes
+            cache.notes.clear()
+        result.warnings += list(dict.fromkeys(notes))
         _last.put(key, result)
     return result

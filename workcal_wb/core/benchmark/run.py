@@ -152,12 +152,17 @@ def _in_child(target, *args):
 
 
 def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print,
-        only: str | None = None) -> Report:
+        only: str | None = None, runner=None) -> Report:
     """Run both methods (alternating, ``rounds`` times each) and the verdicts, write the Markdown to
-    ``out``; with ``only="verdicts"`` run just the verdicts and replace that section of ``out``."""
+    ``out``; with ``only="verdicts"`` run just the verdicts and replace that section of ``out``.
+    ``runner`` (parallel.Runner) is where the verdicts' and scenes' batches run (default: here, one
+    after the other); the timed tables always run one case at a time."""
+    from ..parallel import Runner
+
+    runner = runner or Runner(workers=1)
     if only is not None:
-        section, missed = {"verdicts": lambda: _verdicts(shared, seed, quick, log),
-                           "scenes": lambda: _scenes(shared, seed, log),
+        section, missed = {"verdicts": lambda: _verdicts(shared, seed, quick, log, runner),
+                           "scenes": lambda: _scenes(shared, seed, log, runner),
                            "processes": lambda: _processes(shared, seed, quick, log)}[only]()
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
         atomic_write_text(out, _with_section(previous, section))
@@ -189,10 +194,10 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
     note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
                                               "the bunny cases were skipped.")
     report = _table(per_method, large, seed, quick, rounds, note, gcode)
-    for section, missed in (_processes(shared, seed, quick, log), _verdicts(shared, seed, quick, log)):
+    for section, missed in (_processes(shared, seed, quick, log), _verdicts(shared, seed, quick, log, runner)):
         report = Report(report.text + "\n" + section, report.missed + missed)
     if not quick:
-        section, missed = _scenes(shared, seed, log)
+        section, missed = _scenes(shared, seed, log, runner)
         report = Report(report.text + "\n" + section, report.missed + missed)
     atomic_write_text(out, report.text)
     return report
@@ -228,38 +233,38 @@ def _processes(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, l
         return processes.run(bunny_folder(shared), seed, quick, Path(folder), log)
 
 
-def _verdicts(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
+def _verdicts(shared: Path | None, seed: int, quick: bool, log, runner) -> tuple[str, list]:
     """The verdicts section (see verdicts.py), computed in a child process, and the goals missed that
     count as targets: a wrong pose reported "ok" is one; right poses not "ok" are listed with their
     reasons in the section, not counted here."""
     from . import verdicts
 
-    log("benchmark: verdicts ...")
-    rows = _in_child(_run_verdicts, bunny_folder(shared), seed, 1 if quick else verdicts.VIEWS)
+    log(f"benchmark: verdicts, {runner.describe()} ...")
+    rows = _in_child(_run_verdicts, bunny_folder(shared), seed, 1 if quick else verdicts.VIEWS, runner)
     section, _ = verdicts.table(rows, seed)
     wrong_ok, _ = verdicts.goals(rows)
     return section, [f"verdicts: {len(wrong_ok)} wrong pose(s) reported ok"] if wrong_ok else []
 
 
-def _scenes(shared: Path | None, seed: int, log) -> tuple[str, list]:
+def _scenes(shared: Path | None, seed: int, log, runner) -> tuple[str, list]:
     """The scenes section (see scenes.py), computed in a child process, and the goals it missed."""
     from . import scenes
 
-    log("benchmark: scenes ...")
-    rows = _in_child(_run_scenes, bunny_folder(shared), seed)
-    return scenes.table(rows, seed), scenes.goals(rows)
+    log(f"benchmark: scenes, {runner.describe()} ...")
+    rows = _in_child(_run_scenes, bunny_folder(shared), seed, runner)
+    return scenes.table(rows, seed, runner.describe()), scenes.goals(rows)
 
 
-def _run_scenes(bunny, seed: int, queue) -> None:
+def _run_scenes(bunny, seed: int, runner, queue) -> None:
     from .scenes import run as run_scenes
 
-    queue.put(run_scenes(bunny, seed, log=lambda message: None))
+    queue.put(run_scenes(bunny, seed, log=lambda message: None, runner=runner))
 
 
-def _run_verdicts(bunny, seed: int, views: int, queue) -> None:
+def _run_verdicts(bunny, seed: int, views: int, runner, queue) -> None:
     from .verdicts import run as run_verdicts
 
-    queue.put(run_verdicts(bunny, seed, log=lambda message: None, views=views))
+    queue.put(run_verdicts(bunny, seed, log=lambda message: None, views=views, runner=runner))
 
 
 def _fmt(x, digits=3):

@@ -76,28 +76,36 @@ class SceneRow:
         return self.status
 
 
-def run(bunny_folder: Path | None, seed: int, log=print) -> list[SceneRow]:
+def run(bunny_folder: Path | None, seed: int, log=print, runner=None, specs: dict | None = None) -> list[SceneRow]:
+    """Calibrate every scene of ``specs`` ({variant: [CellSpec, ...]}, default ``variants``); ``runner``
+    (parallel.Runner) says where (default here, one after the other): the rows are the same."""
+    from ..parallel import Runner
+
+    specs = variants(seed, bunny_folder is not None) if specs is None else specs
+    tasks = [(variant, spec, bunny_folder, seed) for variant, group in specs.items() for spec in group]
+    rows = []
+    for row in (runner or Runner(workers=1)).map(scene_row, tasks):
+        rows.append(row)
+        log(f"scenes: {row.scene}: {row.outcome} ({row.time_s:.1f} s)")
+    return rows
+
+
+def scene_row(variant: str, spec: CellSpec, bunny_folder: Path | None, seed: int) -> SceneRow:
+    """One scene made, calibrated and judged (a task of ``run``: where it runs cannot change it)."""
     from ..calibration import CalibrationOptions, calibrate
 
-    rows = []
-    for variant, specs in variants(seed, bunny_folder is not None).items():
-        for spec in specs:
-            cell = cell_scan(spec, bunny_folder)
-            t0 = time.perf_counter()
-            result = calibrate(cell.cloud, cell.workpiece_model, cell.reference_model,
-                               options=CalibrationOptions(seed=seed))
-            elapsed = time.perf_counter() - t0
-            rotation, displacement = float("inf"), float("inf")
-            if result.W is not None:
-                rotation = frames.rotation_between_deg(result.W, cell.W)
-                model = cell.workpiece_model.points
-                displacement = float(np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model),
-                                                    axis=1).max())
-            reason = (result.reasons[0] if result.reasons else "")[:90]
-            rows.append(SceneRow(variant, f"{variant} #{spec.seed}", len(cell.cloud), result.status, rotation,
-                                 displacement, elapsed, reason))
-            log(f"scenes: {rows[-1].scene}: {rows[-1].outcome} ({elapsed:.1f} s)")
-    return rows
+    cell = cell_scan(spec, bunny_folder)
+    t0 = time.perf_counter()
+    result = calibrate(cell.cloud, cell.workpiece_model, cell.reference_model, options=CalibrationOptions(seed=seed))
+    elapsed = time.perf_counter() - t0
+    rotation, displacement = float("inf"), float("inf")
+    if result.W is not None:
+        rotation = frames.rotation_between_deg(result.W, cell.W)
+        model = cell.workpiece_model.points
+        displacement = float(np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model), axis=1).max())
+    reason = (result.reasons[0] if result.reasons else "")[:90]
+    return SceneRow(variant, f"{variant} #{spec.seed}", len(cell.cloud), result.status, rotation, displacement,
+                    elapsed, reason)
 
 
 def goals(rows: list) -> list[str]:
@@ -112,7 +120,9 @@ def goals(rows: list) -> list[str]:
     return missed
 
 
-def table(rows: list, seed: int) -> str:
+def table(rows: list, seed: int, where: str = "in this process") -> str:
+    """The Markdown section; ``where`` the calibrations ran (parallel.Runner.describe: times taken with
+    others running at once are longer)."""
     def fmt(x, digits):
         return "-" if not np.isfinite(x) else f"{x:.{digits}f}"
 
@@ -122,7 +132,7 @@ def table(rows: list, seed: int) -> str:
              "hints: no regions, no scanner position, no up direction. W is found when it lies within "
              f"{FOUND_DEG} deg and {FOUND_MM} mm (largest displacement of a workpiece model point) of the truth; "
              "wrong is a W outside that reported ok. Times are whole calibrations (regions, both matches, the "
-             "physical constraints, 6 bootstrap refits), on a shared 2-core machine.", "",
+             f"physical constraints, 6 bootstrap refits), on a shared 2-core machine, {where}.", "",
              "| variant | scenes | found | ambiguous | failed | wrong | median time (s) | max time (s) |",
              "|---|---|---|---|---|---|---|---|"]
     groups = list(dict.fromkeys(r.variant for r in rows))

@@ -15,6 +15,7 @@ reported "ok" when the tolerance is above the scan's noise.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import groupby
 from pathlib import Path
 
 import numpy as np
@@ -173,18 +174,31 @@ def right(surface, U, truth, limit_mm: float = RIGHT_MM) -> bool:
     return bool(np.quantile(distance, 0.995) < limit_mm)
 
 
-def run(shared_bunny: Path | None, seed: int = 0, log=print, views: int = VIEWS) -> list[VerdictRow]:
-    """Match every case (each model prepared once) and judge its pose."""
+def run(shared_bunny: Path | None, seed: int = 0, log=print, views: int = VIEWS, runner=None,
+        cases: list | None = None) -> list[VerdictRow]:
+    """Match every case (default: the dragon, bunny and simulated cases) and judge its pose; the cases
+    of one model, one after the other, are one task of ``runner`` (parallel.Runner; default here, one
+    after the other), which prepares the model once: where they run cannot change the rows."""
+    from ..parallel import Runner
+
+    if cases is None:
+        cases = dragon_cases(seed) + bunny_verdict_cases(shared_bunny, seed) + simulated_cases(seed, views)
+    tasks = [(list(group), seed) for _, group in groupby(cases, key=lambda case: id(case.model))]
+    rows = []
+    for (group, _), judged in zip(tasks, (runner or Runner(workers=1)).map(judge_cases, tasks)):
+        log(f"verdicts: {group[0].model.name}: {len(judged)} case(s) judged")
+        rows += judged
+    return rows
+
+
+def judge_cases(cases: list[VerdictCase], seed: int) -> list[VerdictRow]:
+    """Cases of one model matched (the model prepared once) and their poses judged."""
     from ..match import match
     from ..surface import SurfaceModel
 
-    cases = dragon_cases(seed) + bunny_verdict_cases(shared_bunny, seed) + simulated_cases(seed, views)
-    surfaces, rows = {}, []
-    for i, case in enumerate(cases):
-        if id(case.model) not in surfaces:
-            log(f"verdicts: preparing {case.model.name} ...")
-            surfaces[id(case.model)] = SurfaceModel(case.model, seed)
-        surface = surfaces[id(case.model)]
+    surface = SurfaceModel(cases[0].model, seed)
+    rows = []
+    for case in cases:
         result = match(Cloud(case.scan, name=case.name), surface, tolerance_mm=case.tolerance_mm, seed=seed)
         rows.append(VerdictRow(case.name, case.group, len(case.scan), case.tolerance_mm, result.noise_mm,
                                len(surface.symmetry_orders) > 0, result.status,

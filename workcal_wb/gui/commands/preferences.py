@@ -12,8 +12,10 @@ import FreeCAD
 
 import workcal_wb
 from workcal_wb.core.match import METHODS
+from workcal_wb.core.model_cache import default_folder
 from workcal_wb.core.toolpath import FORMATS
 from workcal_wb.fc import prefs
+from workcal_wb.fc.prepared_models import KEPT
 from workcal_wb.gui.task_panels.common import Command
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
@@ -32,7 +34,12 @@ class PreferencePage:
         self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
         self.form.setWindowTitle(translate("WorkCal", "WorkCal"))
         self.form.deviationRange.setSpecialValueText(translate("WorkCal", "automatic (3 tolerances)"))
-        self.form.reportDirBrowse.clicked.connect(self.browse_report_dir)
+        self.form.reportDirBrowse.clicked.connect(
+            lambda: self.browse(self.form.reportDir, translate("WorkCal", "Report folder")))
+        self.form.modelCacheDir.setPlaceholderText(str(default_folder()))
+        self.form.modelCacheDirBrowse.clicked.connect(
+            lambda: self.browse(self.form.modelCacheDir, translate("WorkCal", "Prepared models folder")))
+        self.form.keepPreparedModels.toggled.connect(self._show_cache_folder)
         self.form.units.addItem(translate("WorkCal", "ask at the first import"), "")
         for unit in prefs.UNITS:
             self.form.units.addItem(unit, unit)
@@ -54,6 +61,9 @@ class PreferencePage:
         f.deviationRange.setValue(values["DeviationRangeMm"])
         f.reportDir.setText(values["ReportDir"])
         f.pickVisibleOnly.setChecked(bool(values["PickVisibleOnly"]))
+        f.keepPreparedModels.setChecked(bool(values["KeepPreparedModels"]))
+        f.modelCacheDir.setText(values["ModelCacheDir"])
+        self._show_cache_folder(f.keepPreparedModels.isChecked())
 
     def saveSettings(self):
         f = self.form
@@ -67,14 +77,25 @@ class PreferencePage:
         prefs.set("DeviationRangeMm", f.deviationRange.value())
         prefs.set("ReportDir", f.reportDir.text().strip())
         prefs.set("PickVisibleOnly", int(f.pickVisibleOnly.isChecked()))
+        prefs.set("KeepPreparedModels", int(f.keepPreparedModels.isChecked()))
+        prefs.set("ModelCacheDir", f.modelCacheDir.text().strip())
+        if not f.keepPreparedModels.isChecked():
+            KEPT.clear()  # off: the models kept in memory go now, not at the next calibration
 
-    def browse_report_dir(self) -> None:
+    def browse(self, line_edit, title: str) -> None:
+        """Choose a folder for ``line_edit``, starting from the one it names (or its placeholder's, or home)."""
         from workcal_wb.gui.task_panels import QtWidgets
 
-        start = self.form.reportDir.text().strip() or os.path.expanduser("~")
-        folder = QtWidgets.QFileDialog.getExistingDirectory(self.form, translate("WorkCal", "Report folder"), start)
+        start = line_edit.text().strip() or line_edit.placeholderText()
+        start = start if os.path.isdir(start) else os.path.expanduser("~")
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self.form, title, start)
         if folder:
-            self.form.reportDir.setText(folder)
+            line_edit.setText(folder)
+
+    def _show_cache_folder(self, keep: bool) -> None:
+        """The cache folder matters only while models are kept."""
+        for widget in (self.form.modelCacheDirLabel, self.form.modelCacheDir, self.form.modelCacheDirBrowse):
+            widget.setEnabled(keep)
 
 
 _registered = False
