@@ -1,5 +1,6 @@
 """One deviation colour scale, read against the tolerance, shared by FreeCAD's 3D view and the report."""
 import json
+import zlib
 
 import numpy as np
 import pytest
@@ -8,10 +9,26 @@ from workcal_wb.core import frames
 from workcal_wb.core.deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, WITHIN, DeviationScale
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
-from workcal_wb.core.report import colour_map, deviation_figure, write_report
+from workcal_wb.core import picture
+from workcal_wb.core.report import MODEL_GREY, deviation_views, legend_html, write_report
 from workcal_wb.core.result import CalibrationResult
 
 TOL = 0.3
+
+
+def read_png(data: bytes) -> np.ndarray:
+    """The pixels of a PNG as picture.png writes it (8-bit RGB, every row unfiltered)."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks, at = {}, 8
+    while at < len(data):
+        length = int.from_bytes(data[at:at + 4], "big")
+        kind = data[at + 4:at + 8]
+        chunks[kind] = chunks.get(kind, b"") + data[at + 8:at + 8 + length]
+        at += 12 + length
+    width, height = int.from_bytes(chunks[b"IHDR"][:4], "big"), int.from_bytes(chunks[b"IHDR"][4:8], "big")
+    rows = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), np.uint8).reshape(height, 3 * width + 1)
+    assert not rows[:, 0].any()
+    return rows[:, 1:].reshape(height, width, 3)
 
 
 def distance(a, b):
@@ -49,12 +66,18 @@ def test_the_report_uses_the_same_colours(tmp_path):
     from workcal_wb.core.report import deviation_map
 
     d = deviation_map(calibration, points, model)
-    figure = deviation_figure(d, calibration, points, model, scale)
-    scatter = [c for c in figure.axes[0].collections if c.get_array() is not None][0]
-    drawn = scatter.to_rgba(scatter.get_array())[:, :3]
-    np.testing.assert_allclose(drawn, scale.colours(np.asarray(scatter.get_array())), atol=0.01)
-    cmap, norm = colour_map(scale)
-    assert np.allclose(cmap(norm(1.3))[:3], BEYOND_ADDED)
+    views = deviation_views(d, calibration, points, model, scale)
+    assert [v["title"] for v in views] == ["view along the shortest axis", "view along the middle axis"]
+    expected = {tuple(c) for c in picture.to_bytes(scale.colours(d))}
+    lump = tuple(picture.to_bytes(scale.colours([0.8]))[0])
+    for view in views:
+        image = read_png(view["png"])
+        drawn = {tuple(c) for c in image.reshape(-1, 3)} - {(255, 255, 255), (200, 200, 200), (0, 0, 0),
+                                                            tuple(picture.to_bytes(MODEL_GREY))}
+        assert drawn <= expected and lump in drawn  # every point in its scale colour; the lump is seen
+        assert view["scale_bar_mm"] in (10.0, 20.0)  # a round length, about a fifth of the 100 mm part
+    legend = legend_html(scale)
+    assert "rgb({},{},{})".format(*picture.to_bytes(BEYOND_ADDED)) in legend and "+1.2" in legend
     paths = write_report(calibration, tmp_path, workpiece_points=points, workpiece_model=model, deviation_scale=scale)
     data = json.loads(paths["json"].read_text())
     assert data["deviation"]["colour_scale"] == {"tolerance_mm": TOL, "limit_mm": 1.2}

@@ -59,10 +59,27 @@ def test_binning_gives_the_distance_to_the_surface(car):
     error = np.abs(binned - exact)
     assert np.median(error) < 0.01 and np.percentile(error, 95) < 0.1
     # Each filled cell holds the sample nearest its centre, as a KD-tree finds it (stored as index + 1).
-    cells = np.flatnonzero(grid.index > 0)[::97]
-    centres = grid.lo + (np.column_stack(np.unravel_index(cells, tuple(grid.dims))) + 0.5) * grid.cell
+    state = grid.state()
+    cells = state["cells"][state["values"] > 0][::97]
+    centres = grid.centres(cells)
     _, nearest = surface.tree.query(centres)
-    assert np.array_equal(grid.index[cells] - 1, nearest) and np.array_equal(grid.lookup(centres), nearest)
+    assert np.array_equal(grid.stored(cells) - 1, nearest) and np.array_equal(grid.lookup(centres), nearest)
+    # Cells far from the model hold "none", also in bricks precompute never stored.
+    filled, corner = grid.filled, grid.lo[None] + 0.5 * grid.cell
+    assert grid.stored(grid._cells(corner)[0])[0] == -1 and grid.lookup(corner)[0] == -1 and grid.filled == filled
+
+
+def test_a_grid_keeps_only_the_cells_near_what_it_was_asked(car):
+    """Lookups near the surface store the bricks of the cells they visit, not the millions of cells of
+    the whole grid (a dense grid held pages of untouched cells: 11 MB of a bunny match)."""
+    _, surface, _ = car
+    grid = surface.grid(0.5 * surface.spacing, 3.0)
+    rng = np.random.default_rng(5)
+    near = surface.points[rng.choice(len(surface.points), 1000)] + rng.normal(0.0, 0.5, (1000, 3))
+    found = grid.lookup(near)
+    _, nearest = surface.tree.query(grid.centres(grid._cells(near)[0]), distance_upper_bound=3.0)
+    assert np.array_equal(found, np.where(nearest < len(surface.points), nearest, -1))
+    assert grid._rows[:grid._used].nbytes < 0.1 * 4 * np.prod(grid.dims)  # a dense int32 grid's bytes
 
 
 def test_paper_methods_on_a_real_bunny_scan(bunny):

@@ -47,10 +47,11 @@ def test_report_files_are_written_and_self_contained(written):
     assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
     assert "http://" not in page and "https://" not in page and "<link" not in page and "<script" not in page
     sources = re.findall(r'src="([^"]*)"', page)
-    assert len(sources) >= 2  # the deviation map and its histogram
+    assert len(sources) >= 2  # the deviation map's two views
     for src in sources:
         assert src.startswith("data:image/png;base64,")
         assert base64.b64decode(src.split(",", 1)[1])[:8] == PNG
+    assert page.count('aria-label="deviation histogram"') == 1 and "<svg" in page  # drawn inline
     assert "Lump &lt;test&gt; &amp; report" in page  # text is escaped, not injected
 
 
@@ -201,3 +202,30 @@ def test_report_names_the_symmetry_of_a_symmetric_workpiece(tmp_path):
     assert "The workpiece model is symmetric: turning the part 90 degrees about its axis" in page
     assert "The reference model is symmetric" not in page  # the L-block has no symmetry
     assert "workpiece model symmetry: turning the part 90 degrees" in result.summary()
+
+
+def test_a_report_is_written_without_matplotlib(tmp_path):
+    """The report's pictures are drawn with numpy (picture.py): writing one imports no matplotlib,
+    whose import and rendering cost a calibrate process more than a second."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = f"""
+import sys
+import numpy as np
+from workcal_wb.core import frames
+from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.report import write_report
+from workcal_wb.core.result import CalibrationResult
+u, v = np.random.default_rng(1).uniform(-1, 1, (2, 3000))
+model = Cloud(np.column_stack([50 * u, 30 * v, 5 * np.cos(2 * u)]), name="model")
+U = frames.rigid(frames.rot_z(20.0), (10.0, 0.0, 300.0))
+write_report(CalibrationResult("ok", np.eye(4), U=U, V=np.eye(4), tolerance_mm=0.3), {str(tmp_path)!r},
+             workpiece_points=frames.apply(U, model.points), workpiece_model=model)
+print(sorted(m for m in sys.modules if m.split(".")[0] == "matplotlib"))
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "[]" and (tmp_path / "report.html").is_file()

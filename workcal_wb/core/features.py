@@ -14,6 +14,8 @@ from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 BINS = 11
+# Pairs whose angles are computed at once (each pair's own arithmetic: the chunk changes no bit).
+PAIR_CHUNK = 1 << 13
 
 
 def fpfh(points: np.ndarray, normals: np.ndarray, radius: float, max_nn: int = 100) -> np.ndarray:
@@ -44,30 +46,45 @@ def _neighbours(points: np.ndarray, radius: float, max_nn: int):
     """(point, neighbour, squared distance) for each point's nearest ``max_nn`` neighbours closer than
     ``radius``, itself excluded, nearest first, point by point."""
     pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
-    rows, cols = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
-    offset = points[cols] - points[rows]
-    squared = offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1] + offset[:, 2] * offset[:, 2]
-    order = np.argsort(squared, kind="stable")
-    order = order[np.argsort(rows[order], kind="stable")]
+    # Each pair both ways round; 32-bit indices, and one squared length per pair (the same both ways
+    # round, bit for bit), so a model's features take a third of the memory they would.
+    index = np.int32 if len(points) < 2**31 else np.int64
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(index)
+    cols = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(index)
+    squared = np.zeros(len(pairs))
+    for axis in range(3):
+        delta = points[pairs[:, 1], axis] - points[pairs[:, 0], axis]
+        squared += delta * delta
+    del pairs
+    squared = np.concatenate([squared, squared])
+    order = np.lexsort((squared, rows))  # by point, nearest first, ties in pair order
     rows, cols, squared = rows[order], cols[order], squared[order]
+    del order
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
     keep = (rank < max_nn - 1) & (squared < radius * radius)  # max_nn counts the point itself
-    return rows[keep], cols[keep], squared[keep]
+    return rows[keep].astype(np.int64), cols[keep].astype(np.int64), squared[keep]
 
 
 def _simple_histograms(points, normals, rows, cols, count) -> np.ndarray:
     """SPFH: per point, the histograms of the three Darboux-frame angles to each neighbour, each
     neighbour adding 100 / (neighbours) to one bin of each."""
-    f1, f2, f3 = _pair_features(points[rows], normals[rows], points[cols], normals[cols])
-    bins = np.empty((len(rows), 3), np.int64)
-    # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
-    bins[:, 0] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
-    bins[:, 1] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
-    bins[:, 2] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
-    bins += rows[:, None] * (3 * BINS) + BINS * np.arange(3)
+    bins = np.empty((3, len(rows)), np.int64)  # per angle, each pair's bin among all points' bins
+    for start in range(0, len(rows), PAIR_CHUNK):  # a chunk of pairs at a time: their temporaries stay small
+        part = slice(start, start + PAIR_CHUNK)
+        i, j = rows[part], cols[part]
+        f1, f2, f3 = _pair_features(points[i], normals[i], points[j], normals[j])
+        # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
+        bins[0, part] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
+        bins[1, part] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
+        bins[2, part] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
+        bins[:, part] += i * (3 * BINS) + BINS * np.arange(3)[:, None]
     increment = 100.0 / np.maximum(count[rows], 1)
-    return np.bincount(bins.ravel(), weights=np.repeat(increment, 3),
-                       minlength=len(points) * 3 * BINS).reshape(-1, 3 * BINS)
+    # One angle at a time: a bin only ever counts pairs of its own angle, each added in pair order,
+    # so the sums are those of one count over all three (to the bit) in a third of the memory.
+    histograms = np.zeros(len(points) * 3 * BINS)
+    for angle in bins:
+        histograms += np.bincount(angle, weights=increment, minlength=len(histograms))
+    return histograms.reshape(-1, 3 * BINS)
 
 
 def _pair_features(p1, n1, p2, n2):

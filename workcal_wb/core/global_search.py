@@ -77,12 +77,14 @@ def describe_scan(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndar
     return np.stack([features, features[:, _FLIPPED_BINS]], axis=1), normals
 
 
-def nearest_both_ways(a: np.ndarray, b: np.ndarray, chunk: int = 2048):
+def nearest_both_ways(a: np.ndarray, b: np.ndarray, chunk: int = 256):
     """For each row of ``a`` its nearest row of ``b`` and the squared distance, and the same for
     each row of ``b`` in ``a``: one matrix product serves both directions.
 
     Brute force: in 33 dimensions a KD-tree visits most of the points anyway, and BLAS does it six
-    times faster (measured on 1k x 2k features).
+    times faster (measured on 1k x 2k features).  ``chunk`` rows at a time: the block and the copy
+    numpy's argmin down its columns makes stay a few MB (the same answers, bit for bit, for any
+    chunk; as fast as 2048 rows, measured, and 15 MB less peak memory in a bunny match).
     """
     a, b = a.astype(np.float32), b.astype(np.float32)
     a_sq, b_sq = np.einsum("ij,ij->i", a, a), np.einsum("ij,ij->i", b, b)

@@ -233,7 +233,7 @@ def _held(surface: SurfaceModel) -> tuple:
     """What a model holds beyond its samples: its feature and grid keys, and the grid cells filled."""
     grids = list(surface._grids.values()) + list(surface._custom_grids.values())
     return (frozenset(surface._features), frozenset(surface._occupied), frozenset(surface._grids),
-            frozenset(surface._custom_grids), sum(int(np.count_nonzero(g.index)) for g in grids))
+            frozenset(surface._custom_grids), sum(g.known() for g in grids))
 
 
 def _grew(surface: SurfaceModel, held: tuple) -> bool:

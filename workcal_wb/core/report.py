@@ -1,6 +1,6 @@
 """The calibration report: one self-contained HTML page and a JSON file with the same numbers.
 
-report.html has inline CSS and its images embedded as base64 PNG (no scripts, no links, nothing
+report.html has inline CSS, its pictures embedded as base64 PNG and inline SVG (no scripts, no links, nothing
 fetched), so it can be mailed or archived on its own.  report.json is ``CalibrationResult.to_dict()``
 with the regions as point counts (it loads back with ``CalibrationResult.from_json``) plus the
 deviation statistics and the studies.
@@ -17,13 +17,12 @@ from __future__ import annotations
 import base64
 import datetime
 import html
-import io
 import json
 from pathlib import Path
 
 import numpy as np
 
-from . import frames
+from . import frames, picture
 from .atomic import atomic_write_text
 from .deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, DeviationScale, deviation_stats, signed_deviations
 from .errors import OutputError
@@ -37,6 +36,7 @@ HISTOGRAM_BINS = 60
 # Points drawn in a deviation view (a random subset of larger regions, seeded).
 MAX_MAP_POINTS = 60000
 MAX_OUTLINE_POINTS = 20000
+MODEL_GREY = (0.82, 0.82, 0.82)  # the model's own points behind the scan's
 
 STATUS_TEXT = {
     OK: ("OK", "W can be used: both matches and every quality gate passed."),
@@ -87,8 +87,9 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
                       "files": {"html": HTML_NAME, "json": JSON_NAME}}
     images = {}
     if deviations is not None:
-        images["map"] = _png(deviation_figure(deviations, calibration, workpiece_points, workpiece_model, scale))
-        images["histogram"] = _png(histogram_figure(deviations, scale))
+        images["views"] = deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale)
+        images["legend"] = legend_html(scale)
+        images["histogram"] = histogram_svg(deviations, scale)
     page = _page(title, generated, _calibration_body(calibration, deviation, images, workpiece_points is not None
                                                      and workpiece_model is not None)
                  + _studies_body(studies, study_dicts))
@@ -134,22 +135,10 @@ def deviation_summary(deviations: np.ndarray, tolerance_mm: float) -> dict:
     return stats
 
 
-def colour_map(scale: DeviationScale):
-    """The scale as a matplotlib colour map and norm: the same colours as FreeCAD's deviation map."""
-    from matplotlib import colors
-
-    cmap = colors.ListedColormap(scale.colours(np.linspace(-scale.limit_mm, scale.limit_mm, 601)))
-    cmap.set_over(BEYOND_ADDED)
-    cmap.set_under(BEYOND_REMOVED)
-    cmap.set_bad(NO_SURFACE)
-    return cmap, colors.Normalize(vmin=-scale.limit_mm, vmax=scale.limit_mm)
-
-
-def deviation_figure(deviations, calibration, workpiece_points, workpiece_model, scale: DeviationScale):
+def deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale: DeviationScale) -> list:
     """Two orthographic views of the workpiece in its model frame (along the model's principal axes:
-    seen from above and from the side), scan points coloured by signed deviation, model in grey."""
-    from .studies.common import new_figure
-
+    seen from above and from the side), scan points coloured by signed deviation over the model in
+    grey: one dict per view with its title, axes, PNG bytes and the length of its scale bar (mm)."""
     points = frames.apply(frames.invert(calibration.U), np.asarray(workpiece_points, dtype=float).reshape(-1, 3))
     model_points = getattr(workpiece_model, "points", None)
     model_points = points if model_points is None else np.asarray(model_points)
@@ -163,12 +152,10 @@ def deviation_figure(deviations, calibration, workpiece_points, workpiece_model,
     outline = model_points if len(model_points) <= MAX_OUTLINE_POINTS else \
         model_points[rng.choice(len(model_points), MAX_OUTLINE_POINTS, False)]
     outline = (outline - centre) @ axes.T
-    cmap, norm = colour_map(scale)
-    fig = new_figure(11.0, 4.2)
-    views = fig.subplots(1, 2)
-    mappable = None
-    for ax, (h, v, depth), name in zip(views, ((0, 1, 2), (0, 2, 1)), ("view along the shortest axis",
-                                                                       "view along the middle axis")):
+    colours = picture.to_bytes(scale.colours(d))
+    views = []
+    for (h, v, depth), title in zip(((0, 1, 2), (0, 2, 1)), ("view along the shortest axis",
+                                                             "view along the middle axis")):
         # Look from the side the scanner saw (the scan points' side of the part); turning the view
         # around flips the horizontal axis with the depth, so it stays a view, not a mirror image.
         side = 1.0 if local[:, depth].mean() >= 0 else -1.0
@@ -177,40 +164,84 @@ def deviation_figure(deviations, calibration, workpiece_points, workpiece_model,
         if (h, v, depth) == (0, 2, 1):  # (x, z) seen along +y is a left-handed view: turn it around
             sign[h] *= -1
         seen, model = local * sign, outline * sign
-        ax.scatter(model[:, h], model[:, v], s=1, color="#d0d0d0", linewidths=0)
+        view = picture.View(np.vstack([model[:, [h, v]], seen[:, [h, v]]]))
+        image = picture.canvas(view.width, view.height)
+        view.draw(image, model[:, [h, v]], picture.to_bytes(MODEL_GREY))
         order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
-        far = order[~np.isfinite(d[order])]
-        near = order[np.isfinite(d[order])]
-        ax.scatter(seen[far, h], seen[far, v], s=2, color=NO_SURFACE, linewidths=0)
-        mappable = ax.scatter(seen[near, h], seen[near, v], c=d[near], cmap=cmap, norm=norm, s=3, linewidths=0)
-        ax.set_aspect("equal")
-        ax.set_title(name)
-        ax.set_xlabel(f"principal axis {h + 1} of X-A (mm)")
-        ax.set_ylabel(f"principal axis {v + 1} of X-A (mm)")
-    bar = fig.colorbar(mappable, ax=list(views), shrink=0.85, extend="both", ticks=scale.ticks())
-    bar.set_label(f"signed deviation (mm): + clay added, - clay removed; green within +/- {scale.tolerance_mm:g} mm")
-    return fig
+        view.draw(image, seen[order][:, [h, v]], colours[order], dot=2)
+        picture.frame(image)
+        bar = view.scale_bar(image)
+        views.append({"title": title, "horizontal": h + 1, "vertical": v + 1, "png": picture.png(image),
+                      "scale_bar_mm": bar})
+    return views
 
 
-def histogram_figure(deviations, scale: DeviationScale):
-    """Histogram of signed deviations (log count), bars coloured like the map, tolerance band marked."""
-    from .studies.common import new_figure
-
-    tolerance_mm = scale.tolerance_mm
+def histogram_svg(deviations, scale: DeviationScale) -> str:
+    """Histogram of signed deviations (log count) as inline SVG: bars coloured like the map, the
+    tolerance band dotted, axes labelled."""
     d = deviations[np.isfinite(deviations)]
-    fig = new_figure(8.0, 3.6)
-    ax = fig.subplots()
-    if len(d):
-        counts, edges = np.histogram(d, bins=HISTOGRAM_BINS)
-        middles = 0.5 * (edges[1:] + edges[:-1])
-        ax.bar(middles, counts, width=np.diff(edges), color=scale.colours(middles), edgecolor="#555",
-               linewidth=0.3)
-        ax.set_yscale("log")
-    for x in (-tolerance_mm, tolerance_mm):
-        ax.axvline(x, color="black", linestyle=":", linewidth=1)
-    ax.set_xlabel(f"signed deviation (mm); dotted: tolerance +/- {tolerance_mm:g} mm")
-    ax.set_ylabel("scan points")
-    return fig
+    if not len(d):
+        return ""
+    width, height, left, right, top, bottom = 720, 260, 64, 16, 10, 46
+    counts, edges = np.histogram(d, bins=HISTOGRAM_BINS)
+    lo, hi = min(edges[0], -scale.tolerance_mm), max(edges[-1], scale.tolerance_mm)
+    span = hi - lo if hi > lo else 1.0
+    decades = max(1.0, np.log10(counts.max()) + 1)  # a count of 1 is a bar of one decade's height
+
+    def x(value):
+        return left + (value - lo) / span * (width - left - right)
+
+    def y(decade):
+        return height - bottom - decade / decades * (height - top - bottom)
+
+    middles = 0.5 * (edges[1:] + edges[:-1])
+    out = [f'<svg width="{width}" height="{height}" role="img" '
+           'aria-label="deviation histogram" font-family="sans-serif" font-size="11">']
+    for count, left_edge, right_edge, colour in zip(counts, edges[:-1], edges[1:], picture.to_bytes(scale.colours(middles))):
+        if count:
+            top_y = y(np.log10(count) + 1)
+            out.append(f'<rect x="{x(left_edge):.1f}" y="{top_y:.1f}" width="{max(x(right_edge) - x(left_edge), 0.5):.1f}" '
+                       f'height="{y(0) - top_y:.1f}" fill="rgb{tuple(int(c) for c in colour)}" stroke="#555" '
+                       'stroke-width="0.3"/>')
+    out.append(f'<path d="M{left},{top}V{y(0):.1f}H{width - right}" fill="none" stroke="#222"/>')
+    for k in range(int(decades)):
+        out.append(f'<text x="{left - 4}" y="{y(k + 1) + 4:.1f}" text-anchor="end">{10 ** k:g}</text>'
+                   f'<path d="M{left - 3},{y(k + 1):.1f}h3" stroke="#222"/>')
+    ticks = [t for t in scale.ticks() if lo <= t <= hi]
+    ends = [e for e in (edges[0], edges[-1]) if all(abs(x(e) - x(t)) > 36 for t in ticks)]  # no labels on labels
+    for value in ticks + ends:
+        out.append(f'<text x="{x(value):.1f}" y="{y(0) + 14:.1f}" text-anchor="middle">{value:.3g}</text>'
+                   f'<path d="M{x(value):.1f},{y(0):.1f}v3" stroke="#222"/>')
+    for value in (-scale.tolerance_mm, scale.tolerance_mm):
+        out.append(f'<path d="M{x(value):.1f},{top}V{y(0):.1f}" stroke="#000" stroke-dasharray="2,3"/>')
+    out.append(f'<text x="{(left + width - right) / 2:.0f}" y="{height - 6}" text-anchor="middle">signed deviation (mm); '
+               f'dotted: tolerance +/- {scale.tolerance_mm:g} mm</text>'
+               f'<text transform="translate(14,{(top + height - bottom) / 2:.0f}) rotate(-90)" text-anchor="middle">'
+               'scan points (log scale)</text></svg>')
+    return "".join(out)
+
+
+def legend_html(scale: DeviationScale) -> str:
+    """The map's colour scale as HTML: a gradient from -limit to +limit with its ticks, the colours
+    past the limit and the grey of points with no model surface near them."""
+    def rgb(colour):
+        return "rgb({},{},{})".format(*picture.to_bytes(colour))
+
+    values = np.linspace(-scale.limit_mm, scale.limit_mm, 61)
+    stops = ",".join(f"{rgb(c)} {100 * i / (len(values) - 1):.2f}%" for i, c in enumerate(scale.colours(values)))
+    ticks = "".join(f"<span style='position:absolute;left:{50 * (1 + t / scale.limit_mm):.1f}%;"
+                    f"transform:translateX(-50%)'>{t:+.3g}</span>" for t in scale.ticks())
+    swatch = "display:inline-block;width:1.2em;height:1em;vertical-align:middle;border:1px solid #999;background:"
+    return ("<div class='note' style='margin:.5em 0 1em'>"
+            f"<span style='{swatch}{rgb(BEYOND_REMOVED)}'></span> removed past {-scale.limit_mm:g} mm "
+            f"<span style='display:inline-block;width:320px;vertical-align:middle;margin:0 .6em'>"
+            f"<span style='display:block;height:1em;border:1px solid #999;background:linear-gradient(to right,{stops})'>"
+            f"</span><span style='display:block;position:relative;height:1.2em'>{ticks}</span></span>"
+            f"<span style='{swatch}{rgb(BEYOND_ADDED)}'></span> added past +{scale.limit_mm:g} mm "
+            f"&nbsp; <span style='{swatch}{rgb(NO_SURFACE)}'></span> no model surface near "
+            f"&nbsp; <span style='{swatch}{rgb(MODEL_GREY)}'></span> the model X-A"
+            "<br>signed deviation (mm): + clay added, - clay removed; green within +/- "
+            f"{scale.tolerance_mm:g} mm</div>")
 
 
 # --- HTML ----------------------------------------------------------------------------------------------
@@ -362,10 +393,13 @@ def _deviation_html(deviation, images, asked: bool) -> str:
            f"removed), full colour at +/- {_num(scale.get('limit_mm'))} mm; grey points have no model surface "
            "near them. FreeCAD's deviation map uses the same colours.</p>"
            + _table(rows))
-    if "map" in images:
-        out += f'<img alt="deviation colour map" src="data:image/png;base64,{images["map"]}">'
-    if "histogram" in images:
-        out += f'<img alt="deviation histogram" src="data:image/png;base64,{images["histogram"]}">'
+    for view in images.get("views", ()):
+        out += (f"<figure style='display:inline-block;margin:.4em 1em .4em 0'><img alt=\"deviation colour map, "
+                f"{_e(view['title'])}\" src=\"data:image/png;base64,{base64.b64encode(view['png']).decode('ascii')}\">"
+                f"<figcaption class='note'>{_e(view['title'])}: principal axis {view['horizontal']} of X-A to the "
+                f"right, axis {view['vertical']} up; the bar at the lower left is {view['scale_bar_mm']:g} mm"
+                "</figcaption></figure>")
+    out += images.get("legend", "") + images.get("histogram", "")
     return out
 
 
@@ -428,12 +462,6 @@ def _page(title: str, generated: str, body: str) -> str:
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
             f"<style>{CSS}</style></head><body><h1>{_e(title)}</h1>"
             f"<p class='note'>Written {_e(generated)} by WorkCal.</p>{body}</body></html>\n")
-
-
-def _png(figure) -> str:
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", metadata={"Software": None})
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
 def _write(out: Path, files) -> None:
