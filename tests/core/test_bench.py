@@ -1,5 +1,6 @@
 """The benchmark's cases carry the right truth and realistic clutter; its table flags missed targets."""
 import numpy as np
+import pytest
 
 from workcal_wb.core import frames
 from workcal_wb.core.benchmark.cases import BUNNY_UP, bunny_cases, simulated_cases, with_clutter
@@ -63,12 +64,18 @@ def test_table_reports_met_and_missed_targets():
     assert any("0.67 x stock" in m for m in slow_and_wrong.missed)
 
 
-def test_dragon_scans_lie_on_the_other_scans_at_their_truth():
-    """The real-data set in the repository: each decimated dragon scan, moved by its .conf truth,
-    lies on the other 14 scans aligned the same way (the model it is matched against)."""
+@pytest.fixture(scope="module")
+def dragon_set():
+    """The verdicts table's dragon cases (seed 0), made once for the tests that use them."""
     from workcal_wb.core.benchmark.verdicts import dragon_cases
 
-    cases = dragon_cases(seed=1)
+    return dragon_cases(seed=0)
+
+
+def test_dragon_scans_lie_on_the_other_scans_at_their_truth(dragon_set):
+    """The real-data set in the repository: each decimated dragon scan, moved by its .conf truth,
+    lies on the other 14 scans aligned the same way (the model it is matched against)."""
+    cases = dragon_set
     assert len(cases) == 15
     for case in cases[::7]:
         surface = SurfaceModel(case.model)
@@ -151,6 +158,21 @@ def test_peers_read_the_files_workcal_writes(tmp_path):
     for name in ("mesh.ply", "normals.ply"):
         assert np.array_equal(read_vertices(tmp_path / name), points)
 
+
+def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set):
+    """Dragon stand scan 144 against the other 14 (verdicts table, seed 0): the first feature search's
+    best leaves the model 2 mm and more off the scan; the match searches once more and finds the
+    right pose, "ok" (issue 17)."""
+    from workcal_wb.core.benchmark.verdicts import right
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.match import match
+
+    case = next(c for c in dragon_set if c.name == "dragon dragonStandRight_144")
+    surface = SurfaceModel(case.model)
+    result = match(Cloud(case.scan, name=case.name), surface)
+    assert result.status == "ok", result.reasons
+    assert right(surface, result.matrix, case.truth)
+    assert "search again" in result.timings_s
 
 
 def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():

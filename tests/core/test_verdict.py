@@ -136,3 +136,49 @@ def test_noise_above_the_tolerance_is_said_in_one_sentence(workpiece, seed):
     relaxed = match(Cloud(points), surface, tolerance_mm=2.0)
     assert relaxed.status == "ok", relaxed.reasons
     assert _right(surface, relaxed.matrix, truth, limit_mm=2.0)
+
+
+@pytest.fixture(scope="module")
+def verdict_views():
+    """{name: (scan points, true U, surface)}: views of the verdicts table (seed 0) whose right pose
+    was reported "ambiguous" (issue 17) or whose search finds a flipped pose first."""
+    from workcal_wb.core.benchmark.verdicts import simulated_cases
+
+    wanted = ("notched plate #4,", "curved tile #4,", "rebated plate #1,", "rebated plate #6,")
+    surfaces = {}
+    return {c.name.split(",")[0]: (c.scan, c.truth, surfaces.setdefault(c.model.name, SurfaceModel(c.model)))
+            for c in simulated_cases(0, wanted=wanted)}
+
+
+@pytest.mark.parametrize("name", ["notched plate #4", "curved tile #4"])
+def test_flip_leaving_a_few_points_far_off_the_part_is_no_rival(verdict_views, name):
+    """The half turn puts all but a few tens of the scan's points on the part, and the view's cells
+    barely tell it from the right pose; but those few lie ten and more times the noise off its
+    surface (the notch, the tile's rim), which no noise explains: the right pose is "ok"."""
+    points, truth, surface = verdict_views[name]
+    result = match(Cloud(points, name=name), surface)
+    assert _right(surface, result.matrix, truth)
+    assert result.status == "ok", result.reasons
+
+
+@pytest.mark.parametrize("name", ["rebated plate #1", "rebated plate #6"])
+def test_flip_chosen_over_the_right_pose_is_never_ok(verdict_views, name):
+    """The search's best is the flipped plate and the right pose is the rival: the rival leaves no
+    point far off that the flip explains, so the flip cannot be "ok"."""
+    points, truth, surface = verdict_views[name]
+    result = match(Cloud(points, name=name), surface)
+    assert result.status != "ok" or _right(surface, result.matrix, truth), result.reasons
+
+
+def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
+    """Notched plate #4 with the points the flip leaves off the part cut from the scan: every
+    remaining point lies on the part in both poses, so nothing in the scan tells them apart."""
+    points, truth, surface = verdict_views["notched plate #4"]
+    full = match(Cloud(points), surface)
+    flip = min((c for c in full.candidates[1:] if c["rotation_from_best_deg"] > 90),
+               key=lambda c: c["standard_errors_below_best"])
+    on_flip = surface.exact_distance(frames.apply(frames.invert(np.asarray(flip["matrix"])), points)) < 0.3
+    result = match(Cloud(points[on_flip]), surface)
+    assert result.status == "ambiguous", result.reasons
+    assert any("clearly different pose" in r or "other side" in r for r in result.reasons), result.reasons
+

@@ -9,12 +9,14 @@ never by the fraction of the scan: clutter around the part dilutes every pose al
 then judges the best pose and its rivals (other poses of the search, and the model's near-symmetric
 turns, always tried) by what the sensor should have seen from each (visibility.py): scan points on
 the model's visible surface count for a pose, scan points it would hide and model surface missing
-from the scan count against it.  A pose is "ok" only when it explains the scan to within the scan's
-own noise, which must not exceed the tolerance, covers a real part of the model, leaves no large
-share of the view contradicted, pins every motion, and no rival is within the statistical noise of
-its evidence (given the number of view cells and the measured noise); a model that is symmetric
-(symmetry.py) makes every match ambiguous and the result names the symmetry.  Otherwise the match
-fails or is ambiguous and says why.
+from the scan count against it.  When the verdict's best does not fit the scan within its limit,
+the search runs once more with more hypotheses (only such scans pay for it).  A pose is "ok" only
+when it explains the scan to within the scan's own noise, which must not exceed the tolerance,
+covers a real part of the model, leaves no large share of the view contradicted, pins every
+motion, and no rival is within the statistical noise of its evidence (given the number of view
+cells and the measured noise) and of the scan points it leaves far off the part (far_off_test); a
+model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
+symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
 from __future__ import annotations
 
@@ -71,6 +73,9 @@ MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 # RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
 # much as the best; the half turns of a symmetric model are also tried after refinement).
 CANDIDATE_FLOOR = 0.7
+# A search whose best pose does not fit the scan within the verdict's limit is run once more with
+# this many times the RANSAC hypotheses.
+RETRY_SAMPLES = 5
 # Steps of the final robust pass on all the fine points, from a pose already within their noise.
 POLISH_ITERATIONS = 2
 # The verdict refines the best pose again from this many times its final gate, on this many points,
@@ -100,6 +105,10 @@ MAX_SCATTER = 0.3
 # The view evidence: a scan point counts fully on the model surface and nothing at EVIDENCE_SIGMAS
 # times the residual scale (the larger of the best pose's and the scan's and model's own noise).
 EVIDENCE_SIGMAS = 3.0
+# The far-off test (see far_off_test): a scan point counts against a pose from EVIDENCE_SIGMAS
+# residual scales off its surface, fully from FAR_OFF_SIGMAS (further off is no further evidence: an
+# outlier is an outlier).
+FAR_OFF_SIGMAS = 10.0
 # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
 # samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
 PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
@@ -194,16 +203,41 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
-    with timer("verdict"):
-        sample = fine[:VERDICT_POINTS]
+    sample = fine[:VERDICT_POINTS]
+
+    def judged(best, rivals):
+        """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
         judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
-                      options, result["warnings"])
-        best, judged = judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
-                                  lambda state: _widened(state, medium, surface),
-                                  lambda state: _through_the_wall(state, medium, surface, gate))
-        if pose_only:
-            return frames.invert(best.T)
-        return _verdict(scan, sample, surface, best, judged, judge, options, voxel, result, timer)
+                      options, [])
+        return (judge, *judge.rank(best, rivals, lambda state: _polish(state, fine, surface, options.tolerance_mm),
+                                   lambda state: _widened(state, medium, surface),
+                                   lambda state: _through_the_wall(state, medium, surface, gate)))
+
+    with timer("verdict"):
+        judge, chosen, ranking = judged(best, rivals)
+    fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
+    if init is None and not chosen.sigma <= fit_limit and judge.scan_noise <= options.tolerance_mm:
+        # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
+        # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
+        # hypotheses (only such scans pay for it; not one noisier than the tolerance, which fails
+        # whatever the pose).  When its best explains more scan points within the
+        # limit, it is judged with its rivals and the first verdict's best (which won over the first
+        # search's rivals); otherwise the first verdict stands, as without the second search.
+        with timer("search again"):
+            more = replace(options, ransac_samples=RETRY_SAMPLES * options.ransac_samples)
+            again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
+            if again:
+                retried, retried_rivals = _refine(options.method, again, medium, fine, surface, gate,
+                                                  options.tolerance_mm)
+                first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
+        if again and second > first:
+            with timer("verdict"):
+                judge, chosen, ranking = judged(retried, [chosen] + retried_rivals)
+    result["warnings"] += judge.warnings
+    if pose_only:
+        return frames.invert(chosen.T)
+    with timer("verdict"):
+        return _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel, result, timer)
 
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
@@ -490,11 +524,47 @@ class Judge:
                 if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
-        judged = [{"T": p.T, "evidence": e,
-                   "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if i else 0.0,
-                   "other_side": bool(i) and self._from_the_other_side(poses[0].T, p.T)}
-                  for i, (p, e) in enumerate(zip(poses, weighed))]
+        significance = self.options.rival_significance
+        judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False}]
+        best_distances = None
+        for p, e in zip(poses[1:], weighed[1:]):
+            z, far_z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR), None
+            if z < significance:  # a rival by the view: see whether the points it leaves far off rule it out
+                if best_distances is None:
+                    best_distances = self._distances(poses[0].T)
+                far_z = self._far_off(best_distances, p.T)
+                if self.options.method == "robust" and far_z >= significance:
+                    # About to be ruled out by its far-off points alone: first fit it as the best was
+                    # fitted (a rival stopped short of its own best fit would lose unfairly).
+                    p = polish(p)
+                    e = self.evidence(p.T)
+                    z = visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
+                    far_z = self._far_off(best_distances, p.T)
+            judged.append({"T": p.T, "evidence": e, "z": z, "far_z": far_z,
+                           "other_side": self._from_the_other_side(poses[0].T, p.T)})
+        if any(j["z"] < significance <= j["far_z"] for j in judged[1:] if j["far_z"] is not None):
+            # A rival ruled out by its far-off points alone: the other poses are checked by them too
+            # (one the far-off points find significantly better than the best keeps the match open).
+            for j in judged[1:]:
+                if j["far_z"] is None:
+                    j["far_z"] = self._far_off(best_distances, j["T"])
         return poses[0], judged
+
+    def _far_off(self, best_distances: np.ndarray, T: np.ndarray) -> float:
+        """far_off_test of pose T (scan -> model) against the best, whose distances are given."""
+        return far_off_test(best_distances, self._distances(T), self.gate / EVIDENCE_SIGMAS)
+
+    def _distances(self, T: np.ndarray) -> np.ndarray:
+        """Each verdict point's distance from the model's surface under pose T (mm): exact against a
+        mesh; against a point model the point-to-plane residual, or the distance past the nearest
+        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach."""
+        moved = frames.apply(T, self.all_points)
+        if self.surface.is_mesh:
+            return self.surface.exact_distance(moved)
+        reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
+        d, idx, found = self.surface.nearest_cell(moved, reach)
+        plane = np.abs(self.surface.plane_residuals(moved, idx))
+        return np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
 
     def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
         """Whether the rival, seen from the side of the part its own matched surface faces, would
@@ -616,6 +686,31 @@ class Judge:
         return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
 
 
+def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
+    """How many standard errors the scan points a rival pose leaves far off the surface outweigh
+    those the best leaves: ``best`` and ``rival`` are each point's distance from the surface under
+    either pose (mm), ``sigma`` the residual scale (the scan's measured noise, or the fit's if larger).
+
+    The view cells (visibility.compare) count how many cells a pose explains; a flip that moves a
+    notch or a rim leaves only a few tens of points off, in too few cells to tell, but it leaves them
+    ten and more noises off, where noise puts no point.  Each point weighs a robust log-likelihood
+    ratio, a truncated quadratic in its distance beyond the noise band: w(u) = clip((u^2 - 3^2) /
+    (FAR_OFF_SIGMAS^2 - 3^2), 0, 1) for u = distance / sigma, so a point within EVIDENCE_SIGMAS of
+    the surface counts nothing (within the noise, a pose's small misfit must not decide), one
+    FAR_OFF_SIGMAS or more off counts fully, and no outlier counts more than that.  The per-point
+    differences d = w(rival) - w(best) are paired (one scan, both poses) and tested as a mean:
+    sum(d) / sqrt(sum((d - mean d)^2)).  Two poses that explain the scan alike (a symmetry, a view
+    that cannot tell) leave as many points off each way, so the statistic is about standard normal
+    (at most sqrt(n) for n points off one way only: 3 standard errors need at least 9 points all off
+    the rival).  Negative when the best leaves more far off."""
+    def weight(distance):
+        u2 = (distance / max(sigma, 1e-9)) ** 2
+        return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
+
+    d = weight(rival) - weight(best)
+    return float(d.sum() / np.sqrt(max(float(np.sum((d - d.mean()) ** 2)), 1e-12)))
+
+
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     """The pose refined again from WIDER_GATE times its gate on a few points: one stage at the
     wide gate, and only when that moved it, down to the fine gate again."""
@@ -686,7 +781,12 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
     status = FAILED if reasons else OK
     listed = _candidates(judged, surface, T)
-    rivals = [c for c in listed[1:] if c["standard_errors_below_best"] < options.rival_significance
+    significance = options.rival_significance
+    # A rival must be no worse than the best by the view's cells and by the points it leaves far off;
+    # a pose the far-off points find significantly better than the best is a rival whatever the view.
+    far = [np.nan if c["far_off_standard_errors"] is None else c["far_off_standard_errors"] for c in listed]
+    rivals = [c for c, f in zip(listed[1:], far[1:])
+              if (c["standard_errors_below_best"] < significance and not f >= significance) or f <= -significance
               or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
@@ -708,8 +808,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
                        f"{r['rotation_from_best_deg']:.1f} deg away, scores {r['score_ratio']:.0%} of the best, only "
                        f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
-                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm): the part may be nearly symmetric; see "
-                       "candidates")
+                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}: the part may be "
+                       "nearly symmetric; see candidates")
         ties.append(reasons[-1])
     if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
         reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
@@ -744,6 +844,15 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), ties=ties, **result)
 
 
+def _far_off_words(candidate: dict) -> str:
+    """How a rival fares by the scan points it leaves far off, for its reason ("" when not tested)."""
+    far = candidate["far_off_standard_errors"]
+    if far is None:
+        return ""
+    return f", and {far:.1f} by the scan points it leaves far off the part" if far > -1 else (
+        f", and {-far:.1f} above it by the scan points it leaves far off the part")
+
+
 def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
     """The poses weighed, best first, as the result lists them (U of each and how it compares)."""
     best_score = judged[0]["evidence"].score
@@ -754,6 +863,7 @@ def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
         listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
                        "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
                        "standard_errors_below_best": float(entry["z"]),
+                       "far_off_standard_errors": None if entry["far_z"] is None else float(entry["far_z"]),
                        "from_the_other_side": entry["other_side"],
                        "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),

@@ -65,9 +65,11 @@ def dragon_scans(folder: Path = DRAGON_FOLDER) -> dict:
     return {name: (read_cloud(folder / name, units="m").points, pose) for name, pose in poses.items()}
 
 
-def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3) -> list[VerdictCase]:
+def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 0.3,
+                 wanted: tuple = ()) -> list[VerdictCase]:
     """Each scan against the other 14 in the common frame (normals turned towards their scanner,
-    which sat on the +z side of each scan's own frame), moved into a frame of its own."""
+    which sat on the +z side of each scan's own frame), moved into a frame of its own.  ``wanted``
+    (case names), if given, keeps only those cases, as a full run makes them."""
     if not (folder / "dragonStandRight.conf").exists():
         return []
     scans = dragon_scans(folder)
@@ -78,14 +80,17 @@ def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 
     rng = np.random.default_rng(seed)
     cases = []
     for name, (points, pose) in scans.items():
+        motion = random_motion(rng)
+        case = f"dragon {name.removesuffix('.ply')}"
+        if wanted and case not in wanted:
+            continue
         others = [o for o in scans if o != name]
         common = np.vstack([frames.apply(scans[o][1], scans[o][0]) for o in others])
         common_normals = np.vstack([frames.apply_vectors(scans[o][1], normals[o]) for o in others])
         _, keep = pointops.voxel_downsample(common, DRAGON_MODEL_VOXEL_MM)
         model = Cloud(common[keep], common_normals[keep], name=f"dragon without {name}")
-        motion = random_motion(rng)
-        cases.append(VerdictCase(f"dragon {name.removesuffix('.ply')}", "dragon scans (real)",
-                                 frames.apply(motion, points), model, motion @ frames.invert(pose), tolerance_mm))
+        cases.append(VerdictCase(case, "dragon scans (real)", frames.apply(motion, points), model,
+                                 motion @ frames.invert(pose), tolerance_mm))
     return cases
 
 
@@ -128,36 +133,44 @@ def simulated_parts() -> dict:
             "boss plate (4-fold)": shapes.boss_plate()}
 
 
-def simulated_view(mesh: Cloud, rng: np.random.Generator, noise_mm: float, samples: int = 20000):
+def simulated_view(mesh: Cloud, rng: np.random.Generator, noise_mm: float, samples: int = 20000,
+                   scan: bool = True):
     """(scan points in a frame of their own, U): the mesh at a random pose, scanned alone from a
-    random direction 400-900 mm away."""
+    random direction 400-900 mm away.  With ``scan=False`` only the random numbers are drawn (the
+    same as a scan draws) and None is returned: the cases after it come out as in a full run."""
     from scipy.spatial.transform import Rotation
 
     from ..simulate.scanner import scan_part
 
     pose = frames.rigid(Rotation.random(random_state=int(rng.integers(2**31))).as_matrix(), rng.uniform(-200, 200, 3))
-    scan = scan_part(mesh, pose, rng.normal(size=3), rng.uniform(400, 900), samples=samples, noise_sigma_mm=noise_mm,
-                     z_resolution_mm=0.0, seed=int(rng.integers(2**31)))
+    direction, distance, scan_seed = rng.normal(size=3), rng.uniform(400, 900), int(rng.integers(2**31))
     motion = random_motion(rng)
-    return frames.apply(motion, scan.points), motion @ scan.U
+    if not scan:
+        return None
+    scanned = scan_part(mesh, pose, direction, distance, samples=samples, noise_sigma_mm=noise_mm, z_resolution_mm=0.0,
+                        seed=scan_seed)
+    return frames.apply(motion, scanned.points), motion @ scanned.U
 
 
-def simulated_cases(seed: int, views: int = VIEWS) -> list[VerdictCase]:
+def simulated_cases(seed: int, views: int = VIEWS, wanted: tuple = ()) -> list[VerdictCase]:
     """VIEWS views of each simulated part at a noise in NOISE_RANGE_MM (0.3 mm tolerance), and two
-    with NOISY_MM of noise at 0.3 mm and at 2.5 mm tolerance."""
+    with NOISY_MM of noise at 0.3 mm and at 2.5 mm tolerance.  ``wanted`` (names or their starts,
+    e.g. "notched plate #4,"), if given, keeps only those cases, as a full run makes them."""
     rng = np.random.default_rng(seed + 2)
     cases = []
+
+    def add(name, group, mesh, noise, tolerance, samples=20000):
+        view = simulated_view(mesh, rng, noise, samples, scan=not wanted or name.startswith(tuple(wanted)))
+        if view is not None:
+            cases.append(VerdictCase(name, group, view[0], mesh, view[1], tolerance))
+
     for name, mesh in simulated_parts().items():
         for view in range(views):
             noise = float(rng.uniform(*NOISE_RANGE_MM))
-            points, truth = simulated_view(mesh, rng, noise)
-            cases.append(VerdictCase(f"{name} #{view}, {noise:.2f} mm noise", f"simulated {name}", points, mesh,
-                                     truth, 0.3))
+            add(f"{name} #{view}, {noise:.2f} mm noise", f"simulated {name}", mesh, noise, 0.3)
         for view, tolerance in enumerate((0.3, 2.5)):
-            points, truth = simulated_view(mesh, rng, NOISY_MM, samples=40000)
-            cases.append(VerdictCase(f"{name} noisy #{view}, tol {tolerance:g}",
-                                     f"simulated, {NOISY_MM:g} mm noise, tolerance {tolerance:g} mm", points, mesh,
-                                     truth, tolerance))
+            add(f"{name} noisy #{view}, tol {tolerance:g}",
+                f"simulated, {NOISY_MM:g} mm noise, tolerance {tolerance:g} mm", mesh, NOISY_MM, tolerance, samples=40000)
     return cases
 
 
