@@ -136,3 +136,14 @@ def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_o
         assert _errors(result.W, cell.W, cell.workpiece_model)[1] < 0.3
     else:
         assert any("lie on neither placed model" in r for r in result.reasons), result.reasons
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_a_scene_without_a_platform_takes_no_face_of_an_object_for_one(seed):
+    """No platform #0 and #4 of the scenes table: a face of an object, with the other object on one
+    side of it, was taken for the platform; the points behind it went as "below the platform" and the
+    sink check rejected the reference's right pose.  A platform is larger than what stands on it."""
+    cell = cell_scan(CellSpec(platform="none", frame="arbitrary", seed=seed))
+    points = cell.cloud.points
+    spacing = pointops.median_spacing(points, seed=0)
+    assert find_platform(points, spacing, np.random.default_rng(0)) is None
