@@ -214,18 +214,19 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
     return again
 
 
-def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None) -> MatchResult:
+def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None,
+                  attempts: int = SEARCH_ATTEMPTS) -> MatchResult:
     """Match, and when the pose does not explain the region, search again with other seeds and keep
     the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
     nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers.
     ``stands(U)``, when given, says whether a pose is physically possible; a possible pose beats any
-    impossible one."""
+    impossible one.  At most ``attempts`` searches."""
     def rank(result):
         possible = result.matrix is not None and (stands is None or stands(result.matrix))
         return result.status != FAILED, possible, result.fitness
 
     best = None
-    for attempt in range(SEARCH_ATTEMPTS):
+    for attempt in range(attempts):
         result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
         again = best is not None and _same_pose(result, best, surface)
         if best is None or rank(result) > rank(best):
@@ -404,9 +405,10 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
     return cell_labels[inverse]
 
 
-def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
-    """Clusters that could hold the model: those of its size, most alike first, then the larger ones
-    (objects that touch, or clay joining them, make one cluster), smallest first."""
+def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.ndarray, bool]]:
+    """Clusters that could hold the model, each with whether it is larger than the model: those of
+    its size, most alike first, then the larger ones (objects that touch, or clay joining them, make
+    one cluster), smallest first."""
     if len(idx) == 0:
         return []
     alike, larger = [], []
@@ -419,7 +421,8 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[np.ndarray]:
             alike.append((abs(np.log(ratio)), -len(members), members))
         elif ratio > SIZE_RATIO_RANGE[1]:
             larger.append((ratio, -len(members), members))
-    return [members for *_, members in sorted(alike, key=lambda item: item[:2]) + sorted(larger, key=lambda i: i[:2])]
+    return ([(members, False) for *_, members in sorted(alike, key=lambda item: item[:2])]
+            + [(members, True) for *_, members in sorted(larger, key=lambda item: item[:2])])
 
 
 def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float,
@@ -433,9 +436,11 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     rejected for sinking through the platform): a rejected match that explains its cluster says the
     tolerance is below the noise."""
     fallback, rejected, sunk = None, None, False
-    for members in _candidates(points, idx, labels, surface):
+    for members, larger in _candidates(points, idx, labels, surface):
+        # In a cluster larger than the model, no pose explains most of it: searching again with other
+        # seeds cannot tell a better pose (see match_trusted); the split below judges the one found.
         result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
-                               stands)
+                               stands, attempts=1 if larger else SEARCH_ATTEMPTS)
         if result.matrix is not None and not stands(result.matrix):
             sunk = True
             continue
