@@ -7,6 +7,7 @@ matches its model.  The matches found on the way are kept, so calibration does n
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,7 +126,10 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
     report = progress or (lambda fraction, message: None)
     surfaces = {"reference": reference, "workpiece": workpiece}
     near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
+    # Both orders search some clusters alike (the reference's own, when the workpiece is found first):
+    # each cluster is searched once per model.
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
+                   searched={},
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
                                                            blas_threads=blas_threads,
@@ -180,7 +184,7 @@ def _rank(found: dict) -> int:
 
 
 def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, platform, tolerance_mm,
-             options) -> dict:
+             options, searched: dict) -> dict:
     """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
     ones before left: a cluster the model explains only in part is split (see _on_model).  A pose
     that sinks the model through the ``platform`` locates nothing (objects stand on it)."""
@@ -190,7 +194,8 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
         report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
         labels = _clusters(points[left], LINK_SPACINGS * spacing)
         stands = (lambda U, s=surface: not physics.sinks(platform, s, U))
-        result, rejected, sunk = _first_match(scan, points, left, labels, surface, options, role, near_mm[role], stands)
+        result, rejected, sunk = _first_match(scan, points, left, labels, surface, options, role, near_mm[role], stands,
+                                              searched)
         if result is None:
             what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
             raise NotFound(f"{what}: not found in {scan.name}: "
@@ -426,7 +431,7 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.nda
 
 
 def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float,
-                 stands):
+                 stands, searched: dict):
     """Match the model against its candidate clusters in turn; the first trustworthy match wins: one
     whose pose ``stands(U)`` (a pose through the platform fits one arm of a touching pair, not the object).
 
@@ -434,13 +439,17 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     match is judged again on the points near the placed model alone.  Returns (the match or None, the
     best match rejected for its share of points within the tolerance or None, whether a pose was
     rejected for sinking through the platform): a rejected match that explains its cluster says the
-    tolerance is below the noise."""
+    tolerance is below the noise.  ``searched`` keeps each cluster's search for the model (by role and
+    members), so that it is not repeated; callers change the matches they get, so each gets a copy."""
     fallback, rejected, sunk = None, None, False
     for members, larger in _candidates(points, idx, labels, surface):
         # In a cluster larger than the model, no pose explains most of it: searching again with other
         # seeds cannot tell a better pose (see match_trusted); the split below judges the one found.
-        result = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
-                               stands, attempts=1 if larger else SEARCH_ATTEMPTS)
+        key = (role, members.tobytes())
+        if key not in searched:
+            searched[key] = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface,
+                                          options, role, stands, attempts=1 if larger else SEARCH_ATTEMPTS)
+        result = copy.deepcopy(searched[key])
         if result.matrix is not None and not stands(result.matrix):
             sunk = True
             continue
