@@ -12,7 +12,6 @@ from workcal_wb.core.benchmark.cases import random_motion
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.simulate.cell import CellSpec, cell_scan
 
-QUICK = CalibrationOptions(resamples=2)
 
 
 def _errors(W, truth, model):
@@ -21,8 +20,21 @@ def _errors(W, truth, model):
     return frames.rotation_between_deg(W, truth), float(moved.max())
 
 
+_PREPARED = {}
+
+
+def _prepared(model, seed: int) -> SurfaceModel:
+    """One prepared model per model and seed for the whole module: the scenes share the car and the
+    L-block, so each is prepared (and its nearest-point grid filled) once, not per calibration."""
+    key = (model.points.tobytes(), None if model.triangles is None else model.triangles.tobytes(), seed)
+    if key not in _PREPARED:
+        _PREPARED[key] = SurfaceModel(model, seed)
+    return _PREPARED[key]
+
+
 def _calibrated(cell, **options):
-    return calibrate(cell.cloud, cell.workpiece_model, cell.reference_model,
+    seed = options.get("seed", 0)
+    return calibrate(cell.cloud, _prepared(cell.workpiece_model, seed), _prepared(cell.reference_model, seed),
                      options=CalibrationOptions(resamples=2, **options))
 
 
@@ -59,9 +71,11 @@ def test_touching_or_bridged_objects_are_split_by_their_models(layout, seed, fra
     now such a pose locates nothing); then the block, partly hidden by the workpiece, was called
     free to slide (few points lie along its edges) or its surface "went on past its outline" on faces
     seen grazing (see visibility.evidence).  With 2 bootstrap refits the outline test may still find
-    3 % there (its limit): ambiguous is allowed, a wrong W or region is not.  Bridge seed 0: on FreeCAD
-    1.0's stack (numpy 2, scipy 1.15, open3d 0.19) the search finds the block half turned, standing on
-    the platform; the points of the pair it leaves unexplained make that ambiguous, never ok."""
+    3 % there (its limit): ambiguous is allowed, a wrong W or region is not.  Bridge seed 0: once the
+    workpiece is placed, the global search on the block with the clay left on it proposes the right
+    pose in 1 of 8 seeds on either stack (the half turned block explains 70 % of those points); on
+    FreeCAD 1.0's stack (numpy 2, scipy 1.15, open3d 0.19, its scan differing by rounding) none of the
+    3 seeds tried is that one, and the points of the pair it leaves unexplained make it ambiguous, never ok."""
     cell = cell_scan(CellSpec(layout=layout, seed=seed, frame=frame))
     result = _calibrated(cell)
     assert result.status in statuses, result.reasons
@@ -118,7 +132,7 @@ def test_a_block_partly_hidden_by_the_workpiece_it_touches_is_held_by_its_edges(
     """Where few scan points lie along the block's edges, sliding it 0.6 mm pushed too few of them off
     to stand above the count's jitter, and the slide was called free (under-constrained)."""
     cell = cell_scan(CellSpec(layout="touching", frame="arbitrary", seed=1))
-    surface = SurfaceModel(cell.reference_model, 0)
+    surface = _prepared(cell.reference_model, 0)
     points = cell.cloud.points[cell.mask("reference")]
     T = frames.invert(cell.V)
     centred, stability = centre_on_edges(points, surface, T, gate=1.0, sigma=0.066, tolerance_mm=0.3)
@@ -136,3 +150,14 @@ def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_o
         assert _errors(result.W, cell.W, cell.workpiece_model)[1] < 0.3
     else:
         assert any("lie on neither placed model" in r for r in result.reasons), result.reasons
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_a_scene_without_a_platform_takes_no_face_of_an_object_for_one(seed):
+    """No platform #0 and #4 of the scenes table: a face of an object, with the other object on one
+    side of it, was taken for the platform; the points behind it went as "below the platform" and the
+    sink check rejected the reference's right pose.  A platform is larger than what stands on it."""
+    cell = cell_scan(CellSpec(platform="none", frame="arbitrary", seed=seed))
+    points = cell.cloud.points
+    spacing = pointops.median_spacing(points, seed=0)
+    assert find_platform(points, spacing, np.random.default_rng(0)) is None
