@@ -156,8 +156,24 @@ def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_o
 def test_a_scene_without_a_platform_takes_no_face_of_an_object_for_one(seed):
     """No platform #0 and #4 of the scenes table: a face of an object, with the other object on one
     side of it, was taken for the platform; the points behind it went as "below the platform" and the
-    sink check rejected the reference's right pose.  A platform is larger than what stands on it."""
+    sink check rejected the reference's right pose.  A platform is larger than what stands on it.
+    Told which way is up, or where the scanner was (an E57 or PCD file says), a horizontal face of
+    an object was still taken for one: a told side names which way is up, not which plane is the
+    platform."""
     cell = cell_scan(CellSpec(platform="none", frame="arbitrary", seed=seed))
     points = cell.cloud.points
     spacing = pointops.median_spacing(points, seed=0)
-    assert find_platform(points, spacing, np.random.default_rng(0)) is None
+    for hint in ({}, {"up": cell.up}, {"viewpoint": cell.scanner_origin}):
+        assert find_platform(points, spacing, np.random.default_rng(0), **hint) is None, hint
+
+
+def test_a_told_up_or_scanner_position_keeps_the_platform():
+    """The same hints on a scene with a platform (in an arbitrary frame) find it, up the right way."""
+    cell = cell_scan(CellSpec(frame="arbitrary", seed=2))
+    points = cell.cloud.points
+    spacing = pointops.median_spacing(points, seed=0)
+    truth = cell.mask("platform")
+    for hint in ({"up": cell.up}, {"viewpoint": cell.scanner_origin}):
+        platform = find_platform(points, spacing, np.random.default_rng(0), **hint)
+        assert platform.up @ cell.up > 0.999, hint
+        assert platform.below[truth].mean() > 0.99 and truth[platform.below].mean() > 0.99, hint

@@ -309,20 +309,24 @@ def find_platform(points: np.ndarray, spacing: float, rng: np.random.Generator, 
 
 def _platform_on(points, inliers, band: float, spacing: float, up, viewpoint) -> Platform | None:
     """The platform on the plane fitted to ``inliers``, up where ``up``, the ``viewpoint`` or the
-    objects say (see find_platform); None when the plane carries no objects, or is no larger than
-    what stands on it (see _larger_than_footprint), however its up side was told."""
+    objects say (see find_platform); None when the plane carries no objects on that side (see
+    _up_side), or is no larger than what stands on it (see _larger_than_footprint), however its up
+    side was told."""
     centre = inliers.mean(axis=0)
     normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]
     outline = _outline(inliers, centre, normal)
     if outline is None:
         return None
+    standing = _up_side(points, outline, centre, normal, band, spacing)
     if up is not None:
         side, source = float(np.sign(normal @ up)), "the given up direction"
     elif viewpoint is not None:
         side, source = float(np.sign(normal @ (np.asarray(viewpoint, float) - centre))), "the scanner's position"
     else:
-        side, source = _up_side(points, outline, centre, normal, band, spacing), "the objects standing on it"
-    if side == 0 or not _larger_than_footprint(points, outline, centre, side * normal, band, spacing):
+        side, source = standing, "the objects standing on it"
+    # A told side names which way is up, not which plane is the platform: the objects must stand on it
+    # on that side (a horizontal face of an object, or a scanner above it, tells nothing of that).
+    if side == 0 or standing != side or not _larger_than_footprint(points, outline, centre, side * normal, band, spacing):
         return None
     normal = side * normal
     height = (points - centre) @ normal
