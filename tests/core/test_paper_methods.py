@@ -10,7 +10,7 @@ from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.paper_methods import hausdorff_distances, refine_paper
 from workcal_wb.core.simulate.scene import build_scene
-from workcal_wb.core.surface import SurfaceModel
+from workcal_wb.core.surface import NearestGrid, SurfaceModel
 
 
 @pytest.fixture(scope="module")
@@ -81,6 +81,41 @@ def test_a_grid_keeps_only_the_cells_near_what_it_was_asked(car):
     assert np.array_equal(found, np.where(nearest < len(surface.points), nearest, -1))
     assert grid._rows[:grid._used].nbytes < 0.1 * 4 * np.prod(grid.dims)  # a dense int32 grid's bytes
 
+
+
+def test_a_grid_shared_by_two_threads_answers_as_a_grid_used_by_one(car):
+    """In FreeCAD one kept model may serve a task panel's worker and a recompute at once: storing a
+    brick moves rows and grows the array, so lookups racing it returned wrong samples (or raised)."""
+    import sys
+    import threading
+
+    _, surface, _ = car
+    rng = np.random.default_rng(9)
+    batches = [surface.points[rng.choice(len(surface.points), 300)] + rng.normal(0.0, 2.0, (300, 3))
+               for _ in range(120)]
+    alone, shared = (NearestGrid.around(surface.points, surface._tree, 0.37 * surface.spacing, 4.0) for _ in range(2))
+    expected = [alone.lookup(b) for b in batches]
+    found, errors = {}, []
+
+    def work(order):
+        try:
+            for i in order:
+                found.setdefault(i, []).append(shared.lookup(batches[i]))
+        except Exception as exc:  # noqa: BLE001 - any failure in a thread is the defect
+            errors.append(exc)
+
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        threads = [threading.Thread(target=work, args=(order,)) for order in (range(120), range(119, -1, -1))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(switch)
+    assert not errors
+    assert all(np.array_equal(f, expected[i]) for i, fs in found.items() for f in fs)
 
 def test_paper_methods_on_a_real_bunny_scan(bunny):
     case = bunny_cases(bunny, seed=4, scans=("bun090.ply",))[0]  # the clean scan

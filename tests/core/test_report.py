@@ -229,3 +229,18 @@ print(sorted(m for m in sys.modules if m.split(".")[0] == "matplotlib"))
                           cwd=Path(__file__).resolve().parents[2])
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip() == "[]" and (tmp_path / "report.html").is_file()
+
+
+def test_the_scale_bar_is_a_round_length_under_a_fifth_of_the_width_at_any_scale():
+    """A width whose fifth lies just under a power of ten made log10 round up and left no round
+    length to choose (ValueError while writing the report)."""
+    from workcal_wb.core.picture import View
+
+    view = View(np.array([[0.0, 0.0], [1.0, 1.0]]))
+    image = np.zeros((100, 520, 3), np.uint8)
+    for decade in range(-4, 5):
+        for target in (np.nextafter(10.0**decade, 0.0), 10.0**decade, 3.0 * 10.0**decade):
+            view.mm_per_pixel = target / (0.2 * (image.shape[1] - 2 * view.margin))
+            length = view.scale_bar(image)
+            assert 0.39 * target <= length <= target * (1 + 1e-12), (decade, target, length)
+            assert np.isclose(length / 10.0 ** np.floor(np.log10(length) + 1e-9), [1, 2, 5]).any()

@@ -221,8 +221,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
         # hypotheses (only such scans pay for it; not one noisier than the tolerance, which fails
         # whatever the pose).  When its best explains more scan points within the
-        # limit, it is judged with its rivals and the first verdict's best (which won over the first
-        # search's rivals); otherwise the first verdict stands, as without the second search.
+        # limit, it is judged with its rivals, the first verdict's best and the first search's rivals
+        # (one of them may be a flip of it); otherwise the first verdict stands, as without the second search.
         with timer("search again"):
             more = replace(options, ransac_samples=RETRY_SAMPLES * options.ransac_samples)
             again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
@@ -232,7 +232,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                 first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
         if again and second > first:
             with timer("verdict"):
-                judge, chosen, ranking = judged(retried, [chosen] + retried_rivals)
+                judge, chosen, ranking = judged(retried, [chosen] + rivals + retried_rivals)
     result["warnings"] += judge.warnings
     if pose_only:
         return frames.invert(chosen.T)
@@ -783,10 +783,11 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     listed = _candidates(judged, surface, T)
     significance = options.rival_significance
     # A rival must be no worse than the best by the view's cells and by the points it leaves far off;
-    # a pose the far-off points find significantly better than the best is a rival whatever the view.
+    # a pose either test finds significantly better than the best is a rival whatever the other says.
     far = [np.nan if c["far_off_standard_errors"] is None else c["far_off_standard_errors"] for c in listed]
     rivals = [c for c, f in zip(listed[1:], far[1:])
               if (c["standard_errors_below_best"] < significance and not f >= significance) or f <= -significance
+              or c["standard_errors_below_best"] <= -significance
               or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:

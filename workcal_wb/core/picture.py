@@ -62,7 +62,8 @@ class View:
         left; its length in mm."""
         target = 0.2 * (image.shape[1] - 2 * self.margin) * self.mm_per_pixel
         exponent = 10.0 ** np.floor(np.log10(target))
-        length = max(m for m in (1, 2, 5) if m * exponent <= target) * exponent
+        # default: log10 rounds a target just under a power of ten up to it, leaving no multiple at or under it
+        length = max((m for m in (1, 2, 5) if m * exponent <= target), default=0.5) * exponent
         pixels = int(round(length / self.mm_per_pixel))
         row = image.shape[0] - self.margin // 2 - 2
         image[row - 1:row + 1, self.margin:self.margin + pixels] = colour

@@ -11,6 +11,7 @@ computes is plain numpy arrays and numbers, so a cache of prepared models can st
 """
 from __future__ import annotations
 
+import threading
 from functools import cached_property
 
 import numpy as np
@@ -96,6 +97,15 @@ class NearestGrid:
         self._used = 2
         self.complete = complete  # every cell filled (precompute)
         self.filled = 0  # cells filled by lookups and precompute since the grid was made or loaded
+        # One model may serve two threads at once in FreeCAD (a task panel's worker and a recompute):
+        # storing a brick moves rows and may reallocate ``_rows``, so reads and writes take turns.
+        self._lock = threading.RLock()
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "_lock"}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _lock=threading.RLock())
 
     @classmethod
     def around(cls, points: np.ndarray, tree, cell: float, bound: float) -> "NearestGrid":
@@ -157,47 +167,51 @@ class NearestGrid:
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Sample index per point, -1 where no sample lies within the bound of its cell."""
-        keys, inside = self._cells(points)
-        keys = np.where(inside, keys, 0)
-        stored = self.stored(keys)
-        unknown = (stored == _UNKNOWN) & inside
-        if unknown.any():
-            self._fill(keys[unknown])
+        with self._lock:
+            keys, inside = self._cells(points)
+            keys = np.where(inside, keys, 0)
             stored = self.stored(keys)
-        return np.where(inside & (stored > 0), stored - 1, -1)
+            unknown = (stored == _UNKNOWN) & inside
+            if unknown.any():
+                self._fill(keys[unknown])
+                stored = self.stored(keys)
+            return np.where(inside & (stored > 0), stored - 1, -1)
 
     def known(self) -> int:
         """How many cells are stored filled."""
-        return int(np.count_nonzero(self._rows[2:self._used]))
+        with self._lock:
+            return int(np.count_nonzero(self._rows[2:self._used]))
 
     def precompute(self) -> None:
         """Fill every cell now: those within the bound of a sample by query, the rest as "none"."""
-        if self.complete:
-            return
-        occupied = np.zeros(tuple(self.dims), bool)
-        c = np.floor((self._tree().data - self.lo) / self.cell).astype(np.int64)
-        occupied[c[:, 0], c[:, 1], c[:, 2]] = True
-        from scipy.ndimage import binary_dilation
+        with self._lock:
+            if self.complete:
+                return
+            occupied = np.zeros(tuple(self.dims), bool)
+            c = np.floor((self._tree().data - self.lo) / self.cell).astype(np.int64)
+            occupied[c[:, 0], c[:, 1], c[:, 2]] = True
+            from scipy.ndimage import binary_dilation
 
-        near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1)
-        del occupied
-        keys = self._keys(np.argwhere(near))
-        del near
-        self._fill(keys[self.stored(keys) == _UNKNOWN])
-        # Every near cell is filled now: what is still unknown is far from the model.
-        rows = self._rows[2:self._used]
-        rows[rows == _UNKNOWN] = _FAR
-        self._brick_row[self._brick_row == 0] = 1
-        self.complete = True
+            near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1)
+            del occupied
+            keys = self._keys(np.argwhere(near))
+            del near
+            self._fill(keys[self.stored(keys) == _UNKNOWN])
+            # Every near cell is filled now: what is still unknown is far from the model.
+            rows = self._rows[2:self._used]
+            rows[rows == _UNKNOWN] = _FAR
+            self._brick_row[self._brick_row == 0] = 1
+            self.complete = True
 
     def state(self) -> dict:
         """The grid as plain arrays (its geometry and the cells filled so far in the stored bricks), for
         the model cache."""
-        rows = self._rows[2:self._used]
-        row, place = np.nonzero(rows)
-        return {"lo": self.lo, "dims": self.dims, "size": np.array([self.cell, self.bound]),
-                "complete": np.array(self.complete), "cells": self._row_brick[row + 2] * BRICK**3 + place,
-                "values": rows[row, place]}
+        with self._lock:
+            rows = self._rows[2:self._used]
+            row, place = np.nonzero(rows)
+            return {"lo": self.lo, "dims": self.dims, "size": np.array([self.cell, self.bound]),
+                    "complete": np.array(self.complete), "cells": self._row_brick[row + 2] * BRICK**3 + place,
+                    "values": rows[row, place]}
 
     @classmethod
     def from_state(cls, state: dict, tree, samples: int) -> "NearestGrid":

@@ -15,7 +15,8 @@ the content key also catches changes the observer does not see (a containing App
 linked object edited).  With the KeepPreparedModels preference off nothing is kept here.
 
 Thread-safety: ``model`` may run in the GUI's worker thread while the observer runs in the main
-thread; the entries are guarded by a lock.  A model's lazily filled grids give the same answers
+thread; the entries are guarded by a lock, and so is each nearest-sample grid while it is read or
+grown.  A model's lazily filled grids give the same answers
 however and whenever they are filled, so reusing one never changes a result.
 """
 from __future__ import annotations
