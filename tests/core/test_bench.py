@@ -159,20 +159,34 @@ def test_peers_read_the_files_workcal_writes(tmp_path):
         assert np.array_equal(read_vertices(tmp_path / name), points)
 
 
-def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set):
-    """Dragon stand scan 144 against the other 14 (verdicts table, seed 0): the first feature search's
-    best leaves the model 2 mm and more off the scan; the match searches once more and finds the
-    right pose, "ok" (issue 17)."""
+def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set, monkeypatch):
+    """Dragon stand scan 144 against the other 14 (verdicts table, seed 0): on Debian 12's stack the
+    first feature search's best leaves the model 2 mm and more off the scan; the match searches once
+    more and finds the right pose, "ok" (issue 17).  Whether the first search misses depends on the
+    libraries' rounding (on Debian 13's it finds the pose at once), so a first search made to miss
+    (its poses turned and moved off) shows the second one on every stack."""
+    from workcal_wb.core import match as match_module
     from workcal_wb.core.benchmark.verdicts import right
     from workcal_wb.core.geometry import Cloud
-    from workcal_wb.core.match import match
 
     case = next(c for c in dragon_set if c.name == "dragon dragonStandRight_144")
     surface = SurfaceModel(case.model)
-    result = match(Cloud(case.scan, name=case.name), surface)
-    assert result.status == "ok", result.reasons
-    assert right(surface, result.matrix, case.truth)
-    assert "search again" in result.timings_s
+    result = match_module.match(Cloud(case.scan, name=case.name), surface)
+    assert result.status == "ok" and right(surface, result.matrix, case.truth), result.reasons
+
+    searches = match_module._global_candidates
+    off = frames.from_euler_zyz(30.0, 100.0, -60.0, (40.0, -30.0, 20.0))  # a pose the refinement cannot bring back
+    calls = []
+
+    def first_misses(*args, **kwargs):
+        calls.append(1)
+        found = searches(*args, **kwargs)
+        return [(off @ T, score) for T, score in found] if len(calls) == 1 else found
+
+    monkeypatch.setattr(match_module, "_global_candidates", first_misses)
+    result = match_module.match(Cloud(case.scan, name=case.name), surface)
+    assert "search again" in result.timings_s and len(calls) == 2
+    assert result.status == "ok" and right(surface, result.matrix, case.truth), result.reasons
 
 
 def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
