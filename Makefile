@@ -10,9 +10,9 @@ DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matp
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
                  WORKCAL_REQUIRE_PYE57=1
 XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
-# -rs: each skip says why in the CI log; --durations: the slowest tests, the first to trim (CI must stay well under 30 min).
+# -rfEs: each failure, error and skip named (with why) in the CI log; --durations: the slowest tests, the first to trim (CI must stay well under 30 min).
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
-PYTEST_ARGS   := -q -rs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
+PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
 .PHONY: setup python-packages peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
         bench-scenes bench-processes clean
