@@ -767,9 +767,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
     # The far-off test never rules a rival out: on scans simulated by ray casting (open3d 0.19) it
     # judged a not quite converged right pose worse than a flip, and the flip came back "ok".
-    far = [np.nan if c["far_off_standard_errors"] is None else c["far_off_standard_errors"] for c in listed]
-    rivals = [c for c, f in zip(listed[1:], far[1:])
-              if c["standard_errors_below_best"] < significance or f <= -significance
+    rivals = [c for c in listed[1:]
+              if c["standard_errors_below_best"] < significance or c["far_off_standard_errors"] <= -significance
               or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
@@ -828,10 +827,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
 
 
 def _far_off_words(candidate: dict) -> str:
-    """How a rival fares by the scan points it leaves far off, for its reason ("" when not tested)."""
+    """How a rival fares by the scan points it leaves far off, for its reason."""
     far = candidate["far_off_standard_errors"]
-    if far is None:
-        return ""
     return f", and {far:.1f} by the scan points it leaves far off the part" if far > -1 else (
         f", and {-far:.1f} above it by the scan points it leaves far off the part")
 
@@ -846,7 +843,7 @@ def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
         listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
                        "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
                        "standard_errors_below_best": float(entry["z"]),
-                       "far_off_standard_errors": None if entry["far_z"] is None else float(entry["far_z"]),
+                       "far_off_standard_errors": float(entry["far_z"]),
                        "from_the_other_side": entry["other_side"],
                        "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
                        "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
