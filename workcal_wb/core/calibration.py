@@ -10,15 +10,16 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import METHODS, MatchOptions, match, match_pose
-from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
+from .refine import coarse_to_fine
+from .match import COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, MatchOptions, _moved, _polish, _widened, match
+from .regions import MIN_CLUSTER_POINTS, MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -109,8 +110,9 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
         report(0.6, "refining both matches on their regions")
-        U_match = _refit(scan, region_idx["workpiece"], workpiece_surface, found.workpiece_match, match_options, "workpiece")
-        V_match = _refit(scan, region_idx["reference"], reference_surface, found.reference_match, match_options, "reference")
+        U_match, V_match = (_refit(scan, region_idx[role], surface, getattr(found, f"{role}_match"), found.matched[role],
+                                   match_options, role)
+                            for role, surface in (("workpiece", workpiece_surface), ("reference", reference_surface)))
     else:
         region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
         source = "user"
@@ -232,7 +234,15 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
     return scan.subset(idx, name=f"{role} region of {scan.name}")
 
 
-def _refit(scan, idx, surface, found: MatchResult, options: dict, role: str) -> MatchResult:
+def _refit(scan, idx, surface, found: MatchResult, matched: np.ndarray, options: dict, role: str) -> MatchResult:
+    """The match on the final region: the one that found it when it was made on the region's points
+    but for a few strays (fewer than a candidate object has: specks of the object's own clusters
+    too small to search) and with the same options (but the lower fitness a candidate cluster is
+    allowed, which it already passes); else a match again from its pose."""
+    strays = len(idx) - np.count_nonzero(np.isin(matched, idx))
+    if (len(matched) <= len(idx) and np.isin(matched, idx).all() and strays < MIN_CLUSTER_POINTS
+            and found.fitness >= MatchOptions.min_fitness):
+        return replace(found, scan_name=f"{role} region of {scan.name}")
     return refit(_region_cloud(scan, idx, role), surface, found, options)
 
 
@@ -268,9 +278,9 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     for _ in range(options.resamples):
         refit = []
         for role, surface, pose in zip(roles, surfaces, poses):
-            draw = rng.choice(regions[role], n[role], replace=True)
+            draw = scan.points[rng.choice(regions[role], n[role], replace=True)]
             start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
-            refit.append(match_pose(scan.subset(draw, name=f"{role} resample"), surface, start, **match_options))
+            refit.append(_refit_pose(draw, surface, start, options))
         W_r = frames.invert(refit[1]) @ refit[0]
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():
@@ -283,6 +293,21 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
         out[f"{key}_bound_mm"] = float(per_point.max())
         out[f"{key}_median_mm"] = float(np.median(per_point))
     return out
+
+
+def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, options: CalibrationOptions) -> np.ndarray:
+    """U refined on resampled region points from a nudged start, the way a match refines a given
+    start (coarse to fine on a medium subset from a coarse voxel's gate, finished on all the points,
+    then slid home from a wider gate) without the verdict around it: a refit needs the pose alone."""
+    rng = np.random.default_rng(options.seed)
+    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
+    gate = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
+    state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
+    best = _polish(state, points, surface, options.tolerance_mm)
+    wide = _widened(best, medium, surface)
+    if _moved(wide.T, best.T, points.mean(axis=0), best.gate):
+        best = _polish(wide, points, surface, options.tolerance_mm)
+    return frames.invert(best.T)
 
 
 def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> np.ndarray:
