@@ -124,7 +124,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                                 match_options, "workpiece")
 
     report(0.7, "weighing the poses by contact with the platform and free space")
-    scene = _physics_scene(scan, options, found.plane if regions is None else None)
+    scene = _physics_scene(scan, options, *((found.plane, found.spacing) if regions is None else (None, None)))
     U_match, V_match = (physics.decide(m, surface, scene, role, refit=lambda U, idx=region_idx[role], s=surface, r=role:
                                        match(_region_cloud(scan, idx, r), s, init=U, **match_options))
                         for m, surface, role in ((U_match, workpiece_surface, "workpiece"),
@@ -152,12 +152,14 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                              time_s=time.perf_counter() - started, **result)
 
 
-def _physics_scene(scan: Cloud, options: CalibrationOptions, platform) -> physics.Scene:
-    """The whole scan as the physical constraints see it: its points, the platform (found with the
-    regions, or now for regions the user gave) and the scanner positions the user or the file gives."""
+def _physics_scene(scan: Cloud, options: CalibrationOptions, platform, spacing) -> physics.Scene:
+    """The whole scan as the physical constraints see it: its points, their spacing, the platform
+    (both found with the regions, or now for regions the user gave) and the scanner positions the
+    user or the file gives."""
     valid = np.isfinite(scan.points).all(axis=1)
     points = scan.points[valid]
-    spacing = pointops.median_spacing(points, seed=options.seed)
+    if spacing is None:
+        spacing = pointops.median_spacing(points, seed=options.seed)
     if platform is None:
         platform = find_platform(points, spacing, np.random.default_rng(options.seed), options.up,
                                  scanner_origin(scan, options))

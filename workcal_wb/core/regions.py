@@ -86,6 +86,7 @@ class Located:
     plane: "Platform | None" = None
     # The scan indices each match was made on (a region equal to them needs no match again).
     matched: dict | None = None
+    spacing: float | None = None  # the scan's median spacing (mm)
 
     def as_dict(self) -> dict:
         return {"workpiece": self.workpiece, "reference": self.reference, "platform": self.platform,
@@ -173,7 +174,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
                 f"{UNEXPLAINED_SHARE:.0%} of the reference's {len(reference_idx)}): the models may split them wrongly "
                 "(a pose that fits part of the reference); scan the objects apart, or give the regions")
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform,
-                   {role: found[role][3] for role in ("workpiece", "reference")})
+                   {role: found[role][3] for role in ("workpiece", "reference")}, spacing)
 
 
 def _unexplained(objects, labels, *regions) -> int:
