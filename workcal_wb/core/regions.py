@@ -20,7 +20,7 @@ from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
 from .match import MatchOptions, match
 from .result import AMBIGUOUS, FAILED, OK, MatchResult
-from .surface import SurfaceModel
+from .surface import GATE_CELLS, SurfaceModel
 
 # The platform must hold at least this fraction of the scan to count as one (a dark table returns few
 # points); and, when its up side comes from the data (_up_side), at least SUPPORTED_SHARE of the points
@@ -556,5 +556,27 @@ def _on_surface(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, within
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
     """Which scan points lie within ``distance`` of the model placed by U."""
-    _, _, found = surface.nearest(frames.apply(frames.invert(U), points), distance)
+    moved = frames.apply(frames.invert(U), points)
+    # Only points within the model's box (and ``distance`` around it) can be near it: other objects are not.
+    box = (moved >= surface.points.min(axis=0) - distance).all(axis=1) & (
+        moved <= surface.points.max(axis=0) + distance).all(axis=1)
+    found = np.zeros(len(points), dtype=bool)
+    found[box] = _within(surface, moved[box], distance)
     return found
+
+
+def _within(surface: SurfaceModel, points: np.ndarray, distance: float) -> np.ndarray:
+    """Which points (model frame) lie within ``distance`` of a model sample, as the KD-tree says, but
+    asking it only about the few the cell grid leaves open: a point within ``distance`` of its cell's
+    nearest sample is near; one further from it than that plus the cell's diagonal is not (the
+    cell's sample is at most a diagonal further than the point's own nearest)."""
+    level = max(0, int(np.ceil(np.log2(distance / (GATE_CELLS * surface.spacing)))))
+    grid = surface.grid_level(level)
+    idx = grid.lookup(points)
+    d = np.where(idx >= 0, pointops.lengths(points - surface.points[np.maximum(idx, 0)]), np.inf)
+    near = d <= distance
+    open_ = ~near & (d <= distance + np.sqrt(3) * grid.cell)
+    if grid.bound < distance + np.sqrt(3) * grid.cell:  # an empty cell only says no sample within its bound
+        open_ |= idx < 0
+    near[open_] = surface.nearest(points[open_], distance)[2]
+    return near
