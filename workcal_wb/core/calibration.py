@@ -18,7 +18,8 @@ from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
-from .match import COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, MatchOptions, _moved, _polish, _widened, match
+from .match import (COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, NOISE_PROBES, MatchOptions, _moved, _polish,
+                    _widened, match, match_pose)
 from .regions import MIN_CLUSTER_POINTS, MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
@@ -241,8 +242,7 @@ def _refit(scan, idx, surface, found: MatchResult, matched: np.ndarray, options:
     but for a few strays (fewer than a candidate object has: specks of the object's own clusters
     too small to search) and with the same options (but the lower fitness a candidate cluster is
     allowed, which it already passes); else a match again from its pose."""
-    strays = len(idx) - np.count_nonzero(np.isin(matched, idx))
-    if (len(matched) <= len(idx) and np.isin(matched, idx).all() and strays < MIN_CLUSTER_POINTS
+    if (np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) < MIN_CLUSTER_POINTS
             and found.fitness >= MatchOptions.min_fitness):
         return replace(found, scan_name=f"{role} region of {scan.name}")
     return refit(_region_cloud(scan, idx, role), surface, found, options)
@@ -276,13 +276,14 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
+    gates = {role: _start_gate(scan.points[regions[role]], surface, options.seed) for role, surface in zip(roles, surfaces)}
     rotations = []
     for _ in range(options.resamples):
         refit = []
         for role, surface, pose in zip(roles, surfaces, poses):
             draw = scan.points[rng.choice(regions[role], n[role], replace=True)]
             start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
-            refit.append(_refit_pose(draw, surface, start, options))
+            refit.append(_refit_pose(draw, surface, start, gates[role], options, match_options))
         W_r = frames.invert(refit[1]) @ refit[0]
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():
@@ -297,13 +298,28 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     return out
 
 
-def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, options: CalibrationOptions) -> np.ndarray:
+def _start_gate(points: np.ndarray, surface: SurfaceModel, seed: int) -> float:
+    """The gate a match of these region points starts a given pose's refinement at: its coarse voxel
+    (see match._match)."""
+    rng = np.random.default_rng(seed)
+    if len(points) > MatchOptions.max_fine_points:
+        points = points[rng.choice(len(points), MatchOptions.max_fine_points, replace=False)]
+    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
+    probes, _, radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
+    spacing = float(np.median(radius)) / 2 * np.sqrt(len(medium) / len(points)) if len(probes) else 0.0
+    return max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
+
+
+def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, gate: float,
+                options: CalibrationOptions, match_options: dict) -> np.ndarray:
     """U refined on resampled region points from a nudged start, the way a match refines a given
-    start (coarse to fine on a medium subset from a coarse voxel's gate, finished on all the points,
-    then slid home from a wider gate) without the verdict around it: a refit needs the pose alone."""
+    start (coarse to fine on a medium subset from the coarse voxel's ``gate``, finished on all the
+    points, then slid home from a wider gate) without the verdict around it: a refit needs the pose
+    alone.  The paper's methods refit through their match."""
+    if options.method != "robust":
+        return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
     rng = np.random.default_rng(options.seed)
     medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
-    gate = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
     state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
     best = _polish(state, points, surface, options.tolerance_mm)
     wide = _widened(best, medium, surface)
