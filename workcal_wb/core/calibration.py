@@ -20,7 +20,7 @@ from .geometry import Cloud
 from .refine import coarse_to_fine
 from .match import (COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, NOISE_PROBES, MatchOptions, _moved, _polish,
                     _widened, match, match_pose)
-from .regions import MIN_CLUSTER_POINTS, MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
+from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
 
@@ -70,6 +70,9 @@ UNIT_MISMATCH_RATIO = 8.0
 # diagonal, stays below this unless it was written in another unit or frame.
 TOOLPATH_MAX_MEDIAN_DISTANCE = 0.2
 SURFACE_SAMPLES = 2000
+# The match that located a region is its final one when the region holds at most this share of
+# points more than it was made on (see _refit).
+KEPT_MATCH_EXTRA = 0.02
 
 
 def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None,
@@ -239,10 +242,10 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
 
 def _refit(scan, idx, surface, found: MatchResult, matched: np.ndarray, options: dict, role: str) -> MatchResult:
     """The match on the final region: the one that found it when it was made on the region's points
-    but for a few strays (fewer than a candidate object has: specks of the object's own clusters
-    too small to search) and with the same options (but the lower fitness a candidate cluster is
-    allowed, which it already passes); else a match again from its pose."""
-    if (np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) < MIN_CLUSTER_POINTS
+    but for a few (at most KEPT_MATCH_EXTRA of them: specks near the placed model, clusters too
+    small to search, that joined it) and with the same options (but the lower fitness a candidate
+    cluster is allowed, which it already passes); else a match again from its pose."""
+    if (np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) <= KEPT_MATCH_EXTRA * len(idx)
             and found.fitness >= MatchOptions.min_fitness):
         return replace(found, scan_name=f"{role} region of {scan.name}")
     return refit(_region_cloud(scan, idx, role), surface, found, options)
