@@ -114,8 +114,8 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
         report(0.6, "refining both matches on their regions")
-        U_match, V_match = (_refit(scan, region_idx[role], surface, getattr(found, f"{role}_match"), found.matched[role],
-                                   match_options, role)
+        U_match, V_match = (_refit(scan, region_idx[role], surface, getattr(found, f"{role}_match"),
+                                   found.matched[role], match_options, role)
                             for role, surface in (("workpiece", workpiece_surface), ("reference", reference_surface)))
     else:
         region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
@@ -279,7 +279,8 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
-    gates = {role: _start_gate(scan.points[regions[role]], surface, options.seed) for role, surface in zip(roles, surfaces)}
+    gates = {role: _start_gate(scan.points[regions[role]], surface, options.seed)
+             for role, surface in zip(roles, surfaces)}
     rotations = []
     for _ in range(options.resamples):
         refit = []

@@ -190,17 +190,17 @@ def _rank(found: dict) -> int:
 
 def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, platform, tolerance_mm,
              options, searched: dict, labels: np.ndarray) -> dict:
-    """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
-    ones before left: a cluster the model explains only in part is split (see _on_model).  A pose
-    that sinks the model through the ``platform`` locates nothing (objects stand on it).  ``labels``:
-    the clusters of the objects."""
+    """{role: (match, region indices, touching, indices the match was made on)} finding the models in
+    ``order``, each in what the ones before left: a cluster the model explains only in part is split
+    (see _on_model).  A pose that sinks the model through the ``platform`` locates nothing (objects
+    stand on it).  ``labels``: the clusters of the objects."""
     found, left = {}, objects
     for step, role in enumerate(order):
         surface = surfaces[role]
         report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
         stands = (lambda U, s=surface: not physics.sinks(platform, s, U))
-        result, rejected, sunk, matched = _first_match(scan, points, left, labels, surface, options, role, near_mm[role], stands,
-                                              searched)
+        result, rejected, sunk, matched = _first_match(scan, points, left, labels, surface, options, role,
+                                                       near_mm[role], stands, searched)
         if result is None:
             what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
             raise NotFound(f"{what}: not found in {scan.name}: "
@@ -456,8 +456,8 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     A cluster the placed model explains only in part (it holds more: objects touching) is split: the
     match is judged again on the points near the placed model alone.  Returns (the match or None, the
     best match rejected for its share of points within the tolerance or None, whether a pose was
-    rejected for sinking through the platform, the scan indices the match was made on): a rejected match that explains its cluster says the
-    tolerance is below the noise.  ``searched`` keeps each cluster's search for the model (by role and
+    rejected for sinking through the platform, the scan indices the match was made on): a rejected
+    match that explains its cluster says the tolerance is below the noise.  ``searched`` keeps each cluster's search for the model (by role and
     members), so that it is not repeated; callers change the matches they get, so each gets a copy."""
     fallback, rejected, sunk = (None, None), None, False
     for members, larger in _candidates(points, idx, labels, surface):
