@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from workcal_wb.core import frames
+from workcal_wb.core import match as match_module
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.geometry import Cloud
@@ -31,7 +32,13 @@ def car():
     scene = build_scene("car", seed=3)
     scan = _scan(scene)
     toolpath, _ = sample_toolpath_points(scene)
-    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), toolpath_points=toolpath)
+    matches, counted = [], match_module._match
+    match_module._match = lambda *args, **kwargs: matches.append(args[2] is None) or counted(*args, **kwargs)
+    try:
+        result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), toolpath_points=toolpath)
+    finally:
+        match_module._match = counted
+    result.matches = matches  # per match made: whether it searched globally (no initial pose)
     return scene, scan, toolpath, result
 
 
@@ -65,6 +72,15 @@ def test_uncertainty_bounds_the_true_error_at_the_toolpath(car):
     assert actual <= bound <= 0.3  # honest (covers the error) and useful (within the milling tolerance)
     assert result.uncertainty["surface_bound_mm"] > 0
     assert all(g["passed"] for g in result.quality_gates)
+
+
+def test_the_matches_that_located_the_objects_are_the_final_ones(car):
+    """Issue 15: a calibration searched each object, matched each region again from that pose, and
+    made every bootstrap refit a whole match with its verdict (16 matches).  The located matches are
+    kept (made on the same points) and the refits refine the pose alone: one global search per object."""
+    _, _, _, result = car
+    assert result.status == "ok", result.reasons
+    assert result.matches == [True, True]
 
 
 def test_user_regions_give_the_same_W(car):

@@ -6,7 +6,7 @@ import pytest
 
 from workcal_wb.core import frames, pointops
 from workcal_wb.core.edges import centre_on_edges
-from workcal_wb.core.regions import find_platform
+from workcal_wb.core.regions import LINK_SPACINGS, _clusters, _near, find_platform
 from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.benchmark.cases import random_motion
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
@@ -126,6 +126,21 @@ def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():
     assert below_top.sum() > 1000  # the side face is in the scan
     assert platform.below[cell.mask("platform")].mean() > 0.95
     assert platform.below[cell.mask("reference")].mean() < 0.03
+    # The clusters its size test split the objects into come with it, for the regions.
+    spacing = pointops.median_spacing(points, seed=0)
+    assert np.array_equal(platform.labels, _clusters(points[~platform.below], LINK_SPACINGS * spacing))
+
+
+def test_which_points_lie_near_a_placed_model_is_what_the_kd_tree_says():
+    """regions._near asks the cell grid first and the KD-tree only where the grid leaves it open."""
+    cell = cell_scan(CellSpec(seed=2))
+    model = _prepared(cell.reference_model, 0)
+    points = cell.cloud.points[np.isfinite(cell.cloud.points).all(axis=1)]
+    U = frames.rigid(translation=[0.4, -0.3, 0.2]) @ cell.F_S @ frames.invert(cell.B_S)  # a little off the truth
+    for distance in (0.3, 2.0, 3.0, 40.0):
+        truth = model.nearest(frames.apply(frames.invert(U), points), distance)[2]
+        assert 0 < truth.sum() < len(points)
+        assert np.array_equal(_near(points, model, U, distance), truth), distance
 
 
 def test_a_block_partly_hidden_by_the_workpiece_it_touches_is_held_by_its_edges():

@@ -10,14 +10,16 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import METHODS, MatchOptions, match, match_pose
+from .refine import coarse_to_fine
+from .match import (COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, NOISE_PROBES, MatchOptions, _moved, _polish,
+                    _widened, match, match_pose)
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
@@ -68,6 +70,9 @@ UNIT_MISMATCH_RATIO = 8.0
 # diagonal, stays below this unless it was written in another unit or frame.
 TOOLPATH_MAX_MEDIAN_DISTANCE = 0.2
 SURFACE_SAMPLES = 2000
+# The match that located a region is its final one when the region holds at most this share of
+# points more than it was made on (see _refit).
+KEPT_MATCH_EXTRA = 0.02
 
 
 def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None,
@@ -109,8 +114,9 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
         report(0.6, "refining both matches on their regions")
-        U_match = _refit(scan, region_idx["workpiece"], workpiece_surface, found.workpiece_match, match_options, "workpiece")
-        V_match = _refit(scan, region_idx["reference"], reference_surface, found.reference_match, match_options, "reference")
+        U_match, V_match = (_refit(scan, region_idx[role], surface, getattr(found, f"{role}_match"),
+                                   found.matched[role], match_options, role)
+                            for role, surface in (("workpiece", workpiece_surface), ("reference", reference_surface)))
     else:
         region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
         source = "user"
@@ -122,7 +128,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                                 match_options, "workpiece")
 
     report(0.7, "weighing the poses by contact with the platform and free space")
-    scene = _physics_scene(scan, options, found.plane if regions is None else None)
+    scene = _physics_scene(scan, options, *((found.plane, found.spacing) if regions is None else (None, None)))
     U_match, V_match = (physics.decide(m, surface, scene, role, refit=lambda U, idx=region_idx[role], s=surface, r=role:
                                        match(_region_cloud(scan, idx, r), s, init=U, **match_options))
                         for m, surface, role in ((U_match, workpiece_surface, "workpiece"),
@@ -150,12 +156,14 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
                              time_s=time.perf_counter() - started, **result)
 
 
-def _physics_scene(scan: Cloud, options: CalibrationOptions, platform) -> physics.Scene:
-    """The whole scan as the physical constraints see it: its points, the platform (found with the
-    regions, or now for regions the user gave) and the scanner positions the user or the file gives."""
+def _physics_scene(scan: Cloud, options: CalibrationOptions, platform, spacing) -> physics.Scene:
+    """The whole scan as the physical constraints see it: its points, their spacing, the platform
+    (both found with the regions, or now for regions the user gave) and the scanner positions the
+    user or the file gives."""
     valid = np.isfinite(scan.points).all(axis=1)
     points = scan.points[valid]
-    spacing = pointops.median_spacing(points, seed=options.seed)
+    if spacing is None:
+        spacing = pointops.median_spacing(points, seed=options.seed)
     if platform is None:
         platform = find_platform(points, spacing, np.random.default_rng(options.seed), options.up,
                                  scanner_origin(scan, options))
@@ -232,7 +240,14 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
     return scan.subset(idx, name=f"{role} region of {scan.name}")
 
 
-def _refit(scan, idx, surface, found: MatchResult, options: dict, role: str) -> MatchResult:
+def _refit(scan, idx, surface, found: MatchResult, matched: np.ndarray, options: dict, role: str) -> MatchResult:
+    """The match on the final region: the one that found it when it was made on the region's points
+    but for a few (at most KEPT_MATCH_EXTRA of them: specks near the placed model, clusters too
+    small to search, that joined it) and with the same options (but the lower fitness a candidate
+    cluster is allowed, which it already passes); else a match again from its pose."""
+    if (np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) <= KEPT_MATCH_EXTRA * len(idx)
+            and found.fitness >= MatchOptions.min_fitness):
+        return replace(found, scan_name=f"{role} region of {scan.name}")
     return refit(_region_cloud(scan, idx, role), surface, found, options)
 
 
@@ -264,13 +279,15 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
+    gates = {role: _start_gate(scan.points[regions[role]], surface, options.seed)
+             for role, surface in zip(roles, surfaces)}
     rotations = []
     for _ in range(options.resamples):
         refit = []
         for role, surface, pose in zip(roles, surfaces, poses):
-            draw = rng.choice(regions[role], n[role], replace=True)
+            draw = scan.points[rng.choice(regions[role], n[role], replace=True)]
             start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
-            refit.append(match_pose(scan.subset(draw, name=f"{role} resample"), surface, start, **match_options))
+            refit.append(_refit_pose(draw, surface, start, gates[role], options, match_options))
         W_r = frames.invert(refit[1]) @ refit[0]
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():
@@ -283,6 +300,36 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
         out[f"{key}_bound_mm"] = float(per_point.max())
         out[f"{key}_median_mm"] = float(np.median(per_point))
     return out
+
+
+def _start_gate(points: np.ndarray, surface: SurfaceModel, seed: int) -> float:
+    """The gate a match of these region points starts a given pose's refinement at: its coarse voxel
+    (see match._match)."""
+    rng = np.random.default_rng(seed)
+    if len(points) > MatchOptions.max_fine_points:
+        points = points[rng.choice(len(points), MatchOptions.max_fine_points, replace=False)]
+    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
+    probes, _, radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
+    spacing = float(np.median(radius)) / 2 * np.sqrt(len(medium) / len(points)) if len(probes) else 0.0
+    return max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
+
+
+def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, gate: float,
+                options: CalibrationOptions, match_options: dict) -> np.ndarray:
+    """U refined on resampled region points from a nudged start, the way a match refines a given
+    start (coarse to fine on a medium subset from the coarse voxel's ``gate``, finished on all the
+    points, then slid home from a wider gate) without the verdict around it: a refit needs the pose
+    alone.  The paper's methods refit through their match."""
+    if options.method != "robust":
+        return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
+    rng = np.random.default_rng(options.seed)
+    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
+    state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
+    best = _polish(state, points, surface, options.tolerance_mm)
+    wide = _widened(best, medium, surface)
+    if _moved(wide.T, best.T, points.mean(axis=0), best.gate):
+        best = _polish(wide, points, surface, options.tolerance_mm)
+    return frames.invert(best.T)
 
 
 def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> np.ndarray:

@@ -117,7 +117,8 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
         return match
     viewpoint = (match.viewpoint or {}).get("position_mm")
     poses = [np.asarray(match.matrix)] + [np.asarray(c["matrix"]) for c in match.candidates[1:] if c.get("rival")]
-    checks = [_check(surface, scene, U, viewpoint) for U in poses]
+    # Free space only weighs poses against each other: a match without rivals needs only the platform.
+    checks = [_check(surface, scene, U, viewpoint, free=len(poses) > 1) for U in poses]
     possible = [i for i, c in enumerate(checks) if not c["sinks"]]
     if not possible:
         match.status = FAILED
@@ -159,13 +160,13 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
     return match
 
 
-def _check(surface, scene: Scene, U, viewpoint) -> dict:
+def _check(surface, scene: Scene, U, viewpoint, free: bool = True) -> dict:
     out = {"sinks": False, "floats": False, "height": 0.0, "free": None}
     if scene.platform is not None:
         height = contact(scene.platform, surface, U)
         tolerance = CONTACT_BANDS * scene.platform.band
         out.update(height=height, sinks=height < -tolerance, floats=height > tolerance)
-    if scene.sensors is not None or viewpoint is not None:
+    if free and (scene.sensors is not None or viewpoint is not None):
         out["free"] = scene.free_space(surface, U, viewpoint)
     return out
 

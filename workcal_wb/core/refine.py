@@ -41,9 +41,13 @@ def gauss_newton_step(points: np.ndarray, normals: np.ndarray, residuals: np.nda
     Linearised about the current pose, a rotation w and translation t change residual i by
     (p_i x n_i) . w + n_i . t; solved in coordinates centred on the points for conditioning.
     """
-    centre = np.average(points, axis=0, weights=weights)
+    centre = weights @ points / weights.sum()
     p = points - centre
-    J = np.hstack([np.cross(p, normals), normals])
+    J = np.empty((len(p), 6))  # [p x n, n], the cross product written out (np.cross is slow on many rows)
+    J[:, 0] = p[:, 1] * normals[:, 2] - p[:, 2] * normals[:, 1]
+    J[:, 1] = p[:, 2] * normals[:, 0] - p[:, 0] * normals[:, 2]
+    J[:, 2] = p[:, 0] * normals[:, 1] - p[:, 1] * normals[:, 0]
+    J[:, 3:] = normals
     Jw = J * weights[:, None]
     H = J.T @ Jw
     g = Jw.T @ residuals

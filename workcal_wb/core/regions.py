@@ -20,7 +20,7 @@ from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
 from .match import MatchOptions, match
 from .result import AMBIGUOUS, FAILED, OK, MatchResult
-from .surface import SurfaceModel
+from .surface import GATE_CELLS, SurfaceModel
 
 # The platform must hold at least this fraction of the scan to count as one (a dark table returns few
 # points); and, when its up side comes from the data (_up_side), at least SUPPORTED_SHARE of the points
@@ -38,6 +38,7 @@ HULL_MARGIN_MM, HULL_MARGIN_SPACINGS = 5.0, 10.0
 MAX_UP_DEG = 30.0
 PLANE_RANSAC_TRIALS = 2000
 PLANE_SAMPLE_POINTS = 5000
+PLANE_CHUNK = 500  # sample points weighed against every plane at once
 # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
 PLATFORM_BAND_MM = 1.0
 # Objects are split where the gap between points exceeds this many scan spacings.
@@ -83,6 +84,9 @@ class Located:
     reference_match: MatchResult
     warnings: list
     plane: "Platform | None" = None
+    # The scan indices each match was made on (a region equal to them needs no match again).
+    matched: dict | None = None
+    spacing: float | None = None  # the scan's median spacing (mm)
 
     def as_dict(self) -> dict:
         return {"workpiece": self.workpiece, "reference": self.reference, "platform": self.platform,
@@ -121,15 +125,16 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
         warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
                         "points with the objects standing on one side of it); every point is treated as an object")
         platform_idx, objects = np.empty(0, dtype=np.int64), valid
+        labels = _clusters(points[objects], LINK_SPACINGS * spacing)
     else:
-        platform_idx, objects = valid[platform.below], valid[~platform.below]
+        platform_idx, objects, labels = valid[platform.below], valid[~platform.below], platform.labels
     report = progress or (lambda fraction, message: None)
     surfaces = {"reference": reference, "workpiece": workpiece}
     near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
     # Both orders search some clusters alike (the reference's own, when the workpiece is found first):
     # each cluster is searched once per model.
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
-                   searched={},
+                   searched={}, labels=labels,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
                                                            blas_threads=blas_threads,
@@ -149,7 +154,7 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
             found = other
     if isinstance(found, NotFound):
         raise found
-    (workpiece_match, workpiece_idx, wp_touching), (reference_match, reference_idx, ref_touching) = (
+    (workpiece_match, workpiece_idx, wp_touching, _), (reference_match, reference_idx, ref_touching, _) = (
         found["workpiece"], found["reference"])
     if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
         reference_idx = reference_idx[_nearer(points[reference_idx], (reference, reference_match.matrix),
@@ -161,41 +166,41 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
                                               (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
                         f"scan was split between the placed models; each region is only the points nearer its model")
-        left = _unexplained(points, objects, spacing, workpiece_idx, reference_idx)
+        left = _unexplained(objects, labels, workpiece_idx, reference_idx)
         if left > UNEXPLAINED_SHARE * len(reference_idx) and reference_match.status == OK:
             reference_match.status = AMBIGUOUS
             reference_match.reasons.append(
                 f"{left} points of the objects that touch lie on neither placed model (more than "
                 f"{UNEXPLAINED_SHARE:.0%} of the reference's {len(reference_idx)}): the models may split them wrongly "
                 "(a pose that fits part of the reference); scan the objects apart, or give the regions")
-    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform)
+    return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform,
+                   {role: found[role][3] for role in ("workpiece", "reference")}, spacing)
 
 
-def _unexplained(points, objects, spacing: float, *regions) -> int:
-    """How many points of the clusters the regions lie in belong to none of them."""
-    labels = _clusters(points[objects], LINK_SPACINGS * spacing)
+def _unexplained(objects, labels, *regions) -> int:
+    """How many points of the clusters (``labels`` of the ``objects``) the regions lie in belong to none of them."""
     taken = np.isin(objects, np.concatenate(regions))
     involved = np.isin(labels, np.unique(labels[taken]))
     return int(np.count_nonzero(involved & ~taken))
 
 
 def _rank(found: dict) -> int:
-    return sum(match.status == OK for match, _, _ in found.values())
+    return sum(match.status == OK for match, *_ in found.values())
 
 
 def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, platform, tolerance_mm,
-             options, searched: dict) -> dict:
-    """{role: (match, region indices, touching)} finding the models in ``order``, each in what the
-    ones before left: a cluster the model explains only in part is split (see _on_model).  A pose
-    that sinks the model through the ``platform`` locates nothing (objects stand on it)."""
+             options, searched: dict, labels: np.ndarray) -> dict:
+    """{role: (match, region indices, touching, indices the match was made on)} finding the models in
+    ``order``, each in what the ones before left: a cluster the model explains only in part is split
+    (see _on_model).  A pose that sinks the model through the ``platform`` locates nothing (objects
+    stand on it).  ``labels``: the clusters of the objects."""
     found, left = {}, objects
     for step, role in enumerate(order):
         surface = surfaces[role]
         report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
-        labels = _clusters(points[left], LINK_SPACINGS * spacing)
         stands = (lambda U, s=surface: not physics.sinks(platform, s, U))
-        result, rejected, sunk = _first_match(scan, points, left, labels, surface, options, role, near_mm[role], stands,
-                                              searched)
+        result, rejected, sunk, matched = _first_match(scan, points, left, labels, surface, options, role,
+                                                       near_mm[role], stands, searched)
         if result is None:
             what = f"reference object {surface.name}" if role == "reference" else f"workpiece {surface.name}"
             raise NotFound(f"{what}: not found in {scan.name}: "
@@ -203,8 +208,11 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
         on = _on_model(points[left], labels, surface, result.matrix, near_mm[role])
         # Clay added since the model was made is part of the workpiece's clusters, so it joins the region.
         region = on.clusters if role == "workpiece" and not on.touching else on.region
-        found[role] = (result, left[region], on.touching)
+        found[role] = (result, left[region], on.touching, matched)
         left = left[~region]
+        # Whole clusters taken leave the others as they were; a split one may fall apart.
+        labels = np.unique(labels[~region], return_inverse=True)[1].reshape(-1) if not on.touching and len(left) \
+            else _clusters(points[left], LINK_SPACINGS * spacing)
     return found
 
 
@@ -264,6 +272,9 @@ class Platform:
     below: np.ndarray
     band: float
     source: str
+    # Clusters (see _clusters) of the points off it, in their order in the cloud it was found in: its
+    # size test splits them, and the regions start from them.
+    labels: np.ndarray | None = None
 
     def height(self, points: np.ndarray) -> np.ndarray:
         return (points - self.centre) @ self.up
@@ -290,10 +301,11 @@ def find_platform(points: np.ndarray, spacing: float, rng: np.random.Generator, 
         return None
     normals, triples = normals[keep] / length[keep, None], triples[keep]
     offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
-    distance = sample @ normals.T  # (sample, plane), then in place: one 80 MB matrix, not three
-    distance -= offsets
-    near = np.abs(distance, out=distance) < band
-    del distance
+    near = np.empty((len(sample), len(normals)), dtype=bool)  # (sample, plane)
+    for start in range(0, len(sample), PLANE_CHUNK):  # a few MB at a time: it stays in the cache
+        distance = sample[start:start + PLANE_CHUNK] @ normals.T
+        distance -= offsets
+        near[start:start + PLANE_CHUNK] = np.abs(distance, out=distance) < band
     remaining = np.ones(len(sample), dtype=bool)
     for _ in range(PLATFORM_CANDIDATES):  # the largest plane, then the largest of the points left, ...
         counts = near[remaining].sum(axis=0)
@@ -326,11 +338,15 @@ def _platform_on(points, inliers, band: float, spacing: float, up, viewpoint) ->
         side, source = standing, "the objects standing on it"
     # A told side names which way is up, not which plane is the platform: the objects must stand on it
     # on that side (a horizontal face of an object, or a scanner above it, tells nothing of that).
-    if side == 0 or standing != side or not _larger_than_footprint(points, outline, centre, side * normal, band, spacing):
+    if side == 0 or standing != side:
         return None
     normal = side * normal
     height = (points - centre) @ normal
-    return Platform(centre, normal, height < band, band, source)
+    below = height < band
+    labels = _clusters(points[~below], LINK_SPACINGS * spacing)
+    if not _larger_than_footprint(points[~below], labels, outline, centre):
+        return None
+    return Platform(centre, normal, below, band, source, labels)
 
 
 def _outline(inliers, centre, normal):
@@ -376,17 +392,15 @@ def _up_side(points, outline, centre, normal, band: float, spacing: float) -> fl
     return side
 
 
-def _larger_than_footprint(points, outline, centre, up, band: float, spacing: float) -> bool:
+def _larger_than_footprint(above, labels, outline, centre) -> bool:
     """Whether the plane is a platform by its size: its hull's area is at least FOOTPRINT_RATIO times
-    that of the objects standing on its ``up`` side (the hull of their points, projected on the
-    plane, in clusters of MIN_CLUSTER_POINTS or more, so that stray points do not count).  A table
+    that of the objects standing on it (the hull of the points ``above`` it, projected on the
+    plane, in clusters (``labels``) of MIN_CLUSTER_POINTS or more, so that stray points do not count).  A table
     holds what stands on it and more; a face of one object, taken for the platform in a scene
     without one, is smaller than the objects beside it."""
     from scipy.spatial import ConvexHull, QhullError
 
     axes, hull = outline
-    above = points[(points - centre) @ up > band]
-    labels = _clusters(above, LINK_SPACINGS * spacing)
     counts = np.bincount(labels) if len(labels) else np.zeros(0, np.int64)
     objects = above[counts[labels] >= MIN_CLUSTER_POINTS] if len(labels) else above
     if len(objects) < MIN_CLUSTER_POINTS:
@@ -405,9 +419,9 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
     voxel = link / 2
     keys = pointops.voxel_keys(points, voxel)
     cells, inverse = np.unique(keys, return_inverse=True)
-    centres = np.zeros((len(cells), 3))
-    np.add.at(centres, inverse, points)
-    centres /= np.bincount(inverse)[:, None]
+    inverse = inverse.reshape(-1)
+    counts = np.bincount(inverse, minlength=len(cells))
+    centres = np.stack([np.bincount(inverse, points[:, k], len(cells)) for k in range(3)], axis=1) / counts[:, None]
     pairs = cKDTree(centres).query_pairs(link, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(cells), len(cells)))
     _, cell_labels = connected_components(graph, directed=False)
@@ -442,11 +456,12 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     A cluster the placed model explains only in part (it holds more: objects touching) is split: the
     match is judged again on the points near the placed model alone.  Returns (the match or None, the
     best match rejected for its share of points within the tolerance or None, whether a pose was
-    rejected for sinking through the platform): a rejected match that explains its cluster says the
-    tolerance is below the noise.  ``searched`` keeps each cluster's search for the model (by role and
+    rejected for sinking through the platform, the scan indices the match was made on): a rejected
+    match that explains its cluster says the tolerance is below the noise.  ``searched`` keeps each cluster's search for the model (by role and
     members), so that it is not repeated; callers change the matches they get, so each gets a copy."""
-    fallback, rejected, sunk = None, None, False
+    fallback, rejected, sunk = (None, None), None, False
     for members, larger in _candidates(points, idx, labels, surface):
+        matched = members
         # In a cluster larger than the model, no pose explains most of it: searching again with other
         # seeds cannot tell a better pose (see match_trusted); the split below judges the one found.
         key = (role, members.tobytes())
@@ -461,7 +476,8 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
             near = _near(points[members], surface, result.matrix, near_mm)
             if near.sum() < MIN_CLUSTER_POINTS:
                 continue
-            result = refit(Cloud(points[members[near]], name=f"{role} part of a candidate in {scan.name}"), surface,
+            matched = members[near]
+            result = refit(Cloud(points[matched], name=f"{role} part of a candidate in {scan.name}"), surface,
                            result, {**options, "min_fitness": MatchOptions.min_fitness})
         noisy = result.noise_mm > result.tolerance_mm  # failed only because the tolerance is below the noise
         if (result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]
@@ -470,10 +486,10 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
                 rejected = result
             continue
         if result.ok:
-            return result, rejected, sunk
-        if result.status != FAILED and fallback is None:
-            fallback = result
-    return fallback, rejected, sunk
+            return result, rejected, sunk, matched
+        if result.status != FAILED and fallback[0] is None:
+            fallback = result, matched
+    return fallback[0], rejected, sunk, fallback[1]
 
 
 def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, tolerance_mm: float, role: str,
@@ -540,5 +556,27 @@ def _on_surface(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, within
 
 def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
     """Which scan points lie within ``distance`` of the model placed by U."""
-    _, _, found = surface.nearest(frames.apply(frames.invert(U), points), distance)
+    moved = frames.apply(frames.invert(U), points)
+    # Only points within the model's box (and ``distance`` around it) can be near it: other objects are not.
+    box = (moved >= surface.points.min(axis=0) - distance).all(axis=1) & (
+        moved <= surface.points.max(axis=0) + distance).all(axis=1)
+    found = np.zeros(len(points), dtype=bool)
+    found[box] = _within(surface, moved[box], distance)
     return found
+
+
+def _within(surface: SurfaceModel, points: np.ndarray, distance: float) -> np.ndarray:
+    """Which points (model frame) lie within ``distance`` of a model sample, as the KD-tree says, but
+    asking it only about the few the cell grid leaves open: a point within ``distance`` of its cell's
+    nearest sample is near; one further from it than that plus the cell's diagonal is not (the
+    cell's sample is at most a diagonal further than the point's own nearest)."""
+    level = max(0, int(np.ceil(np.log2(distance / (GATE_CELLS * surface.spacing)))))
+    grid = surface.grid_level(level)
+    idx = grid.lookup(points)
+    d = np.where(idx >= 0, pointops.lengths(points - surface.points[np.maximum(idx, 0)]), np.inf)
+    near = d <= distance
+    open_ = ~near & (d <= distance + np.sqrt(3) * grid.cell)
+    if grid.bound < distance + np.sqrt(3) * grid.cell:  # an empty cell only says no sample within its bound
+        open_ |= idx < 0
+    near[open_] = surface.nearest(points[open_], distance)[2]
+    return near
