@@ -3,8 +3,9 @@ scan, each a fresh process, against the peers run the same way on the same files
 
 Every figure is one whole process from start to exit, measured from outside: interpreter start,
 imports (from bytecode compiled beforehand, as an installed package has it: ``compile_bytecode``),
-reading both files, preparing (or, warm, loading) the model, the match and writing the result.  Cold: an empty model cache; warm: the cache a first run filled (the second scan against
-the same model).  The peers keep nothing between runs.  Peak memory is each process's own maximum
+reading both files, preparing (or, warm, loading) the model, the match and writing the result.
+Cold: an empty model cache; warm: the cache a first run filled (the second scan against the same
+model).  The peers keep nothing between runs.  Peak memory is each process's own maximum
 resident set (wait4).  The methods alternate case by case, ROUNDS times, and a case's time is its
 fastest round, so a burst of load from other jobs does not land on one method only.  In-process:
 ``calibrate`` alone with models kept as FreeCAD keeps them (``_in_process``).
