@@ -43,6 +43,31 @@ def test_match_prints_a_summary_and_writes_U_as_json(files, tmp_path, capsys):
     assert printed.startswith("OK") and "Euler ZYZ" in printed and str(out) in printed
 
 
+def test_a_match_with_no_rival_does_not_import_open3d(files, tmp_path):
+    """The far-off test's exact distances to a mesh go through open3d's BVH, whose import alone takes
+    ~0.3 s and ~50 MB of a match process; a match whose verdict has no rival to weigh needs none of
+    them (its best's distances were computed for nothing: a warm bunny match took 3x the time)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    folder, _ = files
+    out = tmp_path / "match.json"
+    code = f"""
+import sys
+from workcal_wb.cli import main
+code = main(["match", {str(folder / "scan_m.ply")!r}, {str(folder / "car.ply")!r}, "--units", "m", "--model-units",
+             "mm", "--json", {str(out)!r}, "--cache", {str(tmp_path / "cache")!r}])
+print(code, "open3d" in sys.modules)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr[-2000:]
+    data = json.loads(out.read_text())
+    assert data["status"] == "ok" and len(data["candidates"]) == 1  # the best alone: no rival
+    assert done.stdout.split()[-2:] == ["0", "False"]
+
+
 def test_paper_method_by_name(files, tmp_path):
     folder, U = files
     out = tmp_path / "icp.json"

@@ -204,9 +204,10 @@ def test_report_names_the_symmetry_of_a_symmetric_workpiece(tmp_path):
     assert "workpiece model symmetry: turning the part 90 degrees" in result.summary()
 
 
-def test_a_report_is_written_without_matplotlib(tmp_path):
+def test_a_report_is_written_without_matplotlib_the_studies_or_the_simulator(tmp_path):
     """The report's pictures are drawn with numpy (picture.py): writing one imports no matplotlib,
-    whose import and rendering cost a calibrate process more than a second."""
+    whose import and rendering cost a calibrate process more than a second, and neither the studies
+    nor the scene simulator they bring (a calibrate process paid ~15 ms for them to format numbers)."""
     import subprocess
     import sys
     from pathlib import Path
@@ -223,7 +224,8 @@ model = Cloud(np.column_stack([50 * u, 30 * v, 5 * np.cos(2 * u)]), name="model"
 U = frames.rigid(frames.rot_z(20.0), (10.0, 0.0, 300.0))
 write_report(CalibrationResult("ok", np.eye(4), U=U, V=np.eye(4), tolerance_mm=0.3), {str(tmp_path)!r},
              workpiece_points=frames.apply(U, model.points), workpiece_model=model)
-print(sorted(m for m in sys.modules if m.split(".")[0] == "matplotlib"))
+print(sorted(m for m in sys.modules if m.split(".")[0] == "matplotlib"
+             or m.startswith(("workcal_wb.core.studies", "workcal_wb.core.simulate"))))
 """
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=Path(__file__).resolve().parents[2])

@@ -525,7 +525,7 @@ class Judge:
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
         judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False}]
-        best_distances = self._distances(poses[0].T)
+        best_distances = self._distances(poses[0].T) if len(poses) > 1 else None  # no rival: no far-off test
         for p, e in zip(poses[1:], weighed[1:]):
             judged.append({"T": p.T, "evidence": e, "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR),
                            "far_z": self._far_off(best_distances, p.T),

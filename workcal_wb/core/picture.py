@@ -47,15 +47,16 @@ class View:
         column, row = self.pixels(points)
         colours = np.broadcast_to(np.asarray(colours, np.uint8), (len(points), 3))
         offsets = np.arange(dot) - dot // 2
-        column = (column[:, None, None] + offsets[None, None, :]).repeat(dot, axis=1).reshape(-1)
-        row = (row[:, None, None] + offsets[None, :, None]).repeat(dot, axis=2).reshape(-1)
-        owner = np.repeat(np.arange(len(points)), dot * dot)
+        shape = (len(points), dot, dot)  # point, dot row, dot column
+        column = np.broadcast_to(column[:, None, None] + offsets[None, None, :], shape).reshape(-1)
+        row = np.broadcast_to(row[:, None, None] + offsets[None, :, None], shape).reshape(-1)
         inside = (column >= 0) & (column < image.shape[1]) & (row >= 0) & (row < image.shape[0])
-        flat = (row * image.shape[1] + column)[inside]
-        owner = owner[inside]
-        # The last point painted at each pixel: the first of each pixel in the reversed order.
-        pixels, last = np.unique(flat[::-1], return_index=True)
-        image.reshape(-1, 3)[pixels] = colours[owner[::-1][last]]
+        # One sort of (pixel, paint order) keys: the last key of each pixel is the point painted last.
+        order = np.flatnonzero(inside)
+        keys = np.sort((row[inside] * image.shape[1] + column[inside]) * len(row) + order)
+        pixel = keys // len(row)
+        last = np.append(pixel[1:] != pixel[:-1], True)
+        image.reshape(-1, 3)[pixel[last]] = colours[keys[last] % len(row) // (dot * dot)]
 
     def scale_bar(self, image: np.ndarray, colour=(0, 0, 0)) -> float:
         """Draw a bar of a round length (1, 2 or 5 x 10^n mm, about a fifth of the width) at the lower

@@ -18,6 +18,7 @@ import base64
 import datetime
 import html
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -250,10 +251,23 @@ def _e(value) -> str:
     return html.escape(str(value), quote=True)
 
 
+def fmt(value, digits: int = 4) -> str:
+    """A number for a terminal or HTML table; '-' for nothing."""
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, (int, np.integer)):
+        return str(value)
+    if isinstance(value, (float, np.floating)):
+        if not math.isfinite(value):
+            return "-"
+        return f"{value:.{digits}f}" if abs(value) >= 10 ** -digits or value == 0 else f"{value:.2e}"
+    return str(value)
+
+
 def _num(value, digits: int = 4) -> str:
     """A number as the terminal summaries print it; text escaped."""
-    from .studies.common import fmt
-
     return _e(value) if isinstance(value, str) else fmt(value, digits)
 
 

@@ -15,6 +15,7 @@ import hashlib
 import io
 import json
 import math
+import zipfile
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
@@ -347,11 +348,15 @@ def result_fingerprint(result: CalibrationResult) -> str:
 # --- region indices -----------------------------------------------------------------------------
 
 def _npz_bytes(indices: dict) -> bytes:
-    """The index arrays as a compressed .npz, 32-bit where they fit."""
-    arrays = {role: np.asarray(v, dtype=np.int64) for role, v in indices.items()}
+    """The index arrays as a compressed .npz, 32-bit where they fit.  Written as np.savez_compressed
+    does, at zlib's fastest level: as small for these rising indices and ~9x faster (0.14 s to 0.016 s
+    for the demo scene's 266k indices)."""
     buffer = io.BytesIO()
-    np.savez_compressed(buffer, **{role: v.astype(np.int32) if v.size == 0 or v.max() < 2**31 else v
-                                   for role, v in arrays.items()})
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
+        for role, v in indices.items():
+            v = np.asarray(v, dtype=np.int64)
+            with archive.open(f"{role}.npy", "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, v.astype(np.int32) if v.size == 0 or v.max() < 2**31 else v)
     return buffer.getvalue()
 
 

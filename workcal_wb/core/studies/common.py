@@ -23,6 +23,7 @@ from ..atomic import atomic_write_bytes, atomic_write_text
 from ..calibration import CalibrationOptions, calibrate
 from ..errors import InputError, WorkCalError
 from ..geometry import Cloud
+from ..report import fmt
 from ..result import OK
 from ..surface import SurfaceModel
 from ..simulate.toolpath_sample import sample_toolpath_points
@@ -286,21 +287,6 @@ def save_figure(figure, path) -> None:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", metadata={"Software": None})
     atomic_write_bytes(path, buffer.getvalue())
-
-
-def fmt(value, digits: int = 4) -> str:
-    """A number for a terminal or HTML table; '-' for nothing."""
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, (int, np.integer)):
-        return str(value)
-    if isinstance(value, (float, np.floating)):
-        if not math.isfinite(value):
-            return "-"
-        return f"{value:.{digits}f}" if abs(value) >= 10 ** -digits or value == 0 else f"{value:.2e}"
-    return str(value)
 
 
 def summary_lines(result: StudyResult) -> list[str]:
