@@ -380,17 +380,24 @@ def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
 
 
 def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
-    """The best pose turned by half turns of the matched patch about its own principal axes, refined
-    where they fit at all: they catch a scan laid inside out on a face (a flat face fits both ways;
-    its edges and the sides beyond tell which).  The model's own near-symmetric turns (turned over,
-    end over end) are tried on the verdict's best, refined like it (_turns_refined_like)."""
+    """The best pose turned by the model's near-symmetric turns (surface.flips: half turns about its
+    principal axes, quarter turns of a near-square, each refined into the model's best self-map) and
+    by half turns of the matched patch about its own principal axes, refined where they fit at all.
+
+    These are the poses a nearly symmetric part is mistaken for (turned over, end over end), and a
+    feature search can miss them when the part's faces look alike, so they are always tried.  The
+    patch's own half turns catch a scan laid inside out on a face (a flat face fits both ways; its
+    edges and the sides beyond tell which).  The verdict tries the turns of its own best again, refined
+    like it (_turns_refined_like).
+    """
     moved = frames.apply(best.T, medium[:TURN_POINTS])
     on_model = surface.nearest_cell(moved, best.gate)[2]
     patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
     from .symmetry import principal_axes, turn
 
     centre, axes, _ = principal_axes(patch, np.ones(len(patch)))
-    turned = np.array([turn(axes[:, k], 180.0, centre) for k in range(3)]) @ best.T
+    turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
+    turned = turns @ best.T
     scores = inlier_scores(medium[:TURN_POINTS], surface, np.concatenate([best.T[None], turned]), best.gate)
     return [coarse_to_fine([medium], surface, T, gate, surface.spacing)
             for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
