@@ -14,7 +14,10 @@ the search runs once more with more hypotheses (only such scans pay for it).  A 
 when it explains the scan to within the scan's own noise, which must not exceed the tolerance,
 covers a real part of the model, leaves no large share of the view contradicted, pins every
 motion, and no rival is within the statistical noise of its evidence (given the number of view
-cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test); a
+cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
+The verdict's best has its near-symmetric turns tried again, each refined exactly like it
+(_turns_refined_like): one of them is the right pose when the search handed over a flip, and only
+such a turn, as converged as the best, is no rival when it leaves significantly more points far off; a
 model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
 symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
@@ -213,8 +216,13 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
         judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
                       options, [])
-        polish = lambda state: _polish(state, fine, surface, options.tolerance_mm)  # noqa: E731
-        widen = lambda state: _widened(state, medium, surface)  # noqa: E731
+
+        def polish(state):
+            return _polish(state, fine, surface, options.tolerance_mm)
+
+        def widen(state):
+            return _widened(state, medium, surface)
+
         return (judge, *judge.rank(best, rivals, polish, widen,
                                    lambda state: _through_the_wall(state, medium, surface, gate),
                                    lambda state: _turns_refined_like(state, medium, surface, gate, polish, widen)))
