@@ -849,14 +849,14 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     significance = options.rival_significance
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
     # The far-off test rules out only a turn of the best refined exactly like it (its flip, tried
-    # always), and only when the best fits the scan within its noise and is ahead by the view's cells:
+    # always; one significantly better by the view's cells took the best's place, see Judge._with_turns),
+    # and only when the best fits the scan within its noise:
     # a pose refined less (or a best that does not fit) can leave points far off by being unconverged,
     # and on scans simulated by ray casting (open3d 0.19) ruling out such a right pose made a flip "ok".
     fits = sigma <= FAR_OFF_FIT * judge.noise
     rivals = [c for c in listed[1:]
               if (c["standard_errors_below_best"] < significance
-                  and not (fits and c["turn_of_best"] and c["standard_errors_below_best"] > 0
-                           and c["far_off_standard_errors"] >= significance))
+                  and not (fits and c["turn_of_best"] and c["far_off_standard_errors"] >= significance))
               or c["far_off_standard_errors"] <= -significance or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
