@@ -586,7 +586,7 @@ class Judge:
     def _with_turns(self, poses: list, weighed: list, turns: list, polish):
         """(poses, their evidence, whether each is a turn of the best refined like it): the best's
         near-symmetric turns (_turns_refined_like) join the poses, each replacing the rivals it
-        repeats (refined less).  A turn better than the best by the view evidence, or as good by it
+        repeats (refined less); a rival that repeats the best is dropped.  A turn better than the best by the view evidence, or as good by it
         and leaving significantly fewer scan points far off the part (far_off_test), becomes the best;
         the best it replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
@@ -596,7 +596,8 @@ class Judge:
                     and np.linalg.norm(frames.apply(a.T, centre[None]) - frames.apply(b.T, centre[None])) <= 2 * b.gate)
 
         turns = [t for t in turns if not near(t, poses[0])]
-        rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) for t in turns)]
+        # A rival refined onto the best since it was found (widened, laid through the wall and back) is no rival.
+        rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) for t in [poses[0]] + turns)]
         poses = [poses[0]] + turns + [poses[i] for i in rest]
         weighed = [weighed[0]] + [self.evidence(t.T) for t in turns] + [weighed[i] for i in rest]
         turned = [False] + [True] * len(turns) + [False] * len(rest)
