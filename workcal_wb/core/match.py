@@ -595,7 +595,7 @@ class Judge:
             return (frames.rotation_between_deg(a.T, b.T) <= 2.0
                     and np.linalg.norm(frames.apply(a.T, centre[None]) - frames.apply(b.T, centre[None])) <= 2 * b.gate)
 
-        turns = [t for t in turns if not near(t, poses[0])]
+        turns = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
         # A rival refined onto the best since it was found (widened, laid through the wall and back) is no rival.
         rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) for t in [poses[0]] + turns)]
         poses = [poses[0]] + turns + [poses[i] for i in rest]
