@@ -522,12 +522,13 @@ class Judge:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
     def rank(self, best, rivals, polish, widen, through, turns):
-        """(best state, [{"T", "evidence", "z", "far_z", "other_side"}, best first]): the poses not equivalent under the
-        model's symmetries, weighed by view evidence.  Every pose is refined again from a wider gate
-        first (``widen``): a fit can stop an edge's width off, its edge points dropped as outliers,
-        and from further out it slides home.  A pose whose evidence is significantly above the best's
-        becomes the best (``polish`` finishes it like the best), and a best whose view shows a misfit
-        (scan points hidden or past its outline, surface missing) is widened again."""
+        """(best state, [{"T", "evidence", "z", "far_z", "other_side", "turn"}, best first]): the poses not
+        equivalent under the model's symmetries, weighed by view evidence.  Every pose is refined again
+        from a wider gate first (``widen``): a fit can stop an edge's width off, its edge points dropped
+        as outliers, and from further out it slides home.  A pose whose evidence is significantly above
+        the best's becomes the best (``polish`` finishes it like the best), and a best whose view shows
+        a misfit (scan points hidden or past its outline, surface missing) is widened again.  Then the
+        best's near-symmetric turns, refined like it (``turns``), are weighed with it (_with_turns)."""
         if self.options.method == "robust":  # each pose slides home, or it is judged off its best
             rivals = [widen(r) for r in rivals]
             wide = widen(best)
@@ -585,10 +586,11 @@ class Judge:
 
     def _with_turns(self, poses: list, weighed: list, turns: list, polish):
         """(poses, their evidence, whether each is a turn of the best refined like it): the best's
-        near-symmetric turns (_turns_refined_like) join the poses, each replacing the rivals it
-        repeats (refined less); a rival that repeats the best is dropped.  A turn better than the best by the view evidence, or as good by it
-        and leaving significantly fewer scan points far off the part (far_off_test), becomes the best;
-        the best it replaces is then one of its turns."""
+        near-symmetric turns (_turns_refined_like, not a symmetry of the model away from it) join the
+        poses, each replacing the rivals it repeats (refined less); a rival that repeats the best is
+        dropped.  A turn better than the best by the view evidence, or as good by it and leaving
+        significantly fewer scan points far off the part (far_off_test), becomes the best; the best it
+        replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
 
         def near(a, b) -> bool:
@@ -851,9 +853,9 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
     # The far-off test rules out only a turn of the best refined exactly like it (its flip, tried
     # always; one significantly better by the view's cells took the best's place, see Judge._with_turns),
-    # and only when the best fits the scan within its noise:
-    # a pose refined less (or a best that does not fit) can leave points far off by being unconverged,
-    # and on scans simulated by ray casting (open3d 0.19) ruling out such a right pose made a flip "ok".
+    # and only when the best fits the scan within its noise: a pose refined less (or a best that does
+    # not fit) can leave points far off by being unconverged, and on scans simulated by ray casting
+    # (open3d 0.19) ruling out such a right pose made a flip "ok".
     fits = sigma <= FAR_OFF_FIT * judge.noise
     rivals = [c for c in listed[1:]
               if (c["standard_errors_below_best"] < significance
