@@ -151,19 +151,23 @@ def verdict_views():
 
 
 @pytest.mark.parametrize("name", ["notched plate #4", "curved tile #4"])
-def test_flip_leaving_a_few_points_far_off_the_part_is_never_a_wrong_ok(verdict_views, name):
+def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name):
     """The half turn puts all but a few tens of the scan's points on the part, and the view's cells
-    barely tell it from the right pose.  Letting the points it leaves far off rule it out made the
-    right pose "ok" here, but on the same views simulated by ray casting (open3d 0.19) it ruled out a
-    not quite converged right pose and the flip came back "ok": the flip stays a rival, the match
-    is never "ok" on a wrong pose (issue 17: these right poses are still not "ok")."""
+    barely tell it from the right pose.  Never a wrong "ok" (on the same views simulated by ray casting,
+    open3d 0.19, the search never proposed the notched plate's right pose and a flip came back "ok"),
+    and the right pose is "ok" (issue 17: both came back ambiguous): the verdict tries the turns of its
+    best refined exactly like it, and such a flip, nearly as good by the view's cells, leaves tens of
+    scan points ten noises and more off the part where the right pose leaves none: listed, not a rival."""
     points, truth, surface = verdict_views[name]
     result = match(Cloud(points, name=name), surface)
     right = _right(surface, result.matrix, truth)
-    if name == "notched plate #4" and not right and raycast.works():
-        pytest.xfail("known: on the ray-cast view the search never proposes the right pose and the flip, "
-                     "19 standard errors ahead of every candidate it tried, comes back ok (issue 17)")
     assert result.status != "ok" or right, result.reasons
+    if name == "curved tile #4" and raycast.works() and not right:
+        pytest.xfail("known: on the ray-cast view the search ends on a pose slid 2.4 degrees along the tile's "
+                     "curve, 4 times the noise off, that no refinement leaves; it stays ambiguous (issue 17)")
+    assert result.status == "ok" and right, result.reasons
+    flips = [c for c in result.candidates[1:] if c["rotation_from_best_deg"] > 170 and c["turn_of_best"]]
+    assert flips and all(c["far_off_standard_errors"] >= 3 and not c.get("rival") for c in flips)
 
 
 @pytest.mark.parametrize("name", ["rebated plate #1", "rebated plate #6"])
