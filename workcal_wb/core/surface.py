@@ -12,6 +12,7 @@ computes is plain numpy arrays and numbers, so a cache of prepared models can st
 from __future__ import annotations
 
 import threading
+import weakref
 from functools import cached_property
 
 import numpy as np
@@ -376,8 +377,13 @@ class SurfaceModel:
             self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._features[key]
 
-    def _tree(self) -> cKDTree:
-        return self.tree
+    @property
+    def _tree(self):
+        """A function returning the samples' KD-tree, for the grids to keep: it holds the model weakly (a
+        bound method would tie the model and its grids in a reference cycle, so a model let go would
+        keep its memory until the garbage collector's next full pass)."""
+        model = weakref.ref(self)
+        return lambda: model().tree
 
     # -- as plain data, for the model cache (model_cache.py) ---------------------------------------
 
