@@ -198,14 +198,58 @@ def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: flo
     return Scanner(position, centre, **{"pixel_pitch_mm": pitch, "noise_sigma_mm": 0.1, "seed": seed, **settings})
 
 
-def large_case(seed: int = 0) -> Case:
-    """About two million points (1.9 M): the car scanned at a 0.2 mm pitch, platform and L-block around it."""
+# --- Large scans as files (the large-scan table runs the commands on them as whole processes) ----
+
+LARGE_PITCH_MM = 0.2 / np.sqrt(2.64)  # about 5 million points per capture of large_scanner's view
+
+
+def large_scanner(scene, seed: int, pitch_mm: float = 0.2, shift_px=(0.0, 0.0)):
+    """The car with platform and L-block seen from 0.8 m, the image zoomed to ``pitch_mm`` at the car and
+    its window kept (the 0.2 mm capture is 1700 x 1300 pixels); ``shift_px`` moves the aim by a fraction
+    of a pixel, so several captures interleave like one of a finer pitch."""
     from ..simulate.scanner import Scanner
+
+    centre = scene.workpiece.in_base().points.mean(axis=0)
+    scale = 0.2 / pitch_mm
+    image_size = (round(1700 * scale), round(1300 * scale))
+    first = Scanner(centre + np.array([300.0, -300.0, 700.0]), centre, pixel_pitch_mm=pitch_mm,
+                    image_size=image_size, noise_sigma_mm=0.1, seed=seed)
+    across = first.frame()[:3, :2] @ np.asarray(shift_px, float) * pitch_mm
+    return Scanner(first.position, centre + across, pixel_pitch_mm=pitch_mm, image_size=image_size,
+                   noise_sigma_mm=0.1, seed=seed)
+
+
+def write_large_scan(path: Path, captures: int, seed: int = 0) -> np.ndarray:
+    """A binary PLY (float32 x y z, mm) of ``captures`` captures of the car scene at LARGE_PITCH_MM
+    (about 5 million points each), each aimed a fraction of a pixel off the first (a 2 x 2 interleave for
+    4), all in the first capture's frame S, as a scanner merges its shots; one capture is in memory at a
+    time.  Returns the true U = ^S X of the workpiece model (``large_model``)."""
     from ..simulate.scene import build_scene
 
     scene = build_scene("car", seed=seed)
-    centre = scene.workpiece.in_base().points.mean(axis=0)
-    scanner = Scanner(centre + np.array([300.0, -300.0, 700.0]), centre, pixel_pitch_mm=0.2,
-                      image_size=(1700, 1300), noise_sigma_mm=0.1, seed=seed)
-    scan = scanner.scan(scene)
-    return Case("car, 0.2 mm pitch", "large", scan.points, scene.workpiece_model(), scan.U, exact=True)
+    shifts = [(0.0, 0.0), (0.5, 0.5), (0.5, 0.0), (0.0, 0.5)][:captures]
+    scans = [large_scanner(scene, seed + k, LARGE_PITCH_MM, shift) for k, shift in enumerate(shifts)]
+    S_B = frames.invert(scans[0].frame())
+    parts = []
+    for scanner in scans:  # float32 in the first frame: 12 bytes a point kept, one capture's arrays at a time
+        capture = scanner.scan(scene)
+        parts.append(frames.apply(S_B @ capture.B_S, capture.points).astype("<f4"))
+        del capture
+    count = sum(map(len, parts))
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment units mm\ncomment {captures} simulated capture(s) "
+              f"of the car scene, seed {seed}\nelement vertex {count}\nproperty float x\nproperty float y\n"
+              "property float z\nend_header\n").encode()
+    partial = Path(f"{path}.part")  # renamed when whole: an interrupted run leaves no file to reuse
+    with open(partial, "wb") as fh:
+        fh.write(header)
+        for part in parts:
+            fh.write(part.tobytes())
+    partial.replace(path)
+    return S_B @ scene.W
+
+
+def large_model(seed: int = 0) -> Cloud:
+    """The workpiece model of write_large_scan's scene."""
+    from ..simulate.scene import build_scene
+
+    return build_scene("car", seed=seed).workpiece_model()
