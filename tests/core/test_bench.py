@@ -164,6 +164,7 @@ def test_a_section_replaces_its_old_version_and_keeps_the_rest():
     assert replaced == added.replace("first", "second")
     assert _with_section(replaced, "## Scenes\n\nnew\n") == replaced.replace("\nscenes\n", "\nnew\n")
     assert _with_section("", "## Scenes\n\nonly\n") == "## Scenes\n\nonly\n"
+    assert _with_section(replaced, "# Benchmark\n\nnew table\n") == replaced.replace("## Summary\n\nold table", "new table")
     assert _with_section(replaced, "## Large scans\n\nbig\n") == replaced.replace(
         "## Whole processes", "## Large scans\n\nbig\n\n## Whole processes")
 

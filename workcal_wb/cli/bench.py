@@ -26,8 +26,9 @@ def add_parser(subparsers):
                     "Exit status 1 when WorkCal misses a target or reports a wrong pose as ok.")
     p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
     p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
-    p.add_argument("--only", choices=("verdicts", "scenes", "processes", "large"),
-                   help="run only this table and replace its section of FILE (verdicts: how often each match status "
+    p.add_argument("--only", choices=("matcher", "large", "processes", "verdicts", "scenes"),
+                   help="run only this table and replace its section of FILE (matcher: WorkCal's matcher beside "
+                        "stock Open3D on the bunny and simulated cases, with the G-code throughput; verdicts: how often each match status "
                         "comes with the right pose, on real scans and nearly symmetric parts; scenes: cell scans in "
                         "any frame, touching objects, any view, calibrated with automatic regions; processes: the "
                         "match and calibrate commands as whole processes, cold and warm, beside the peers; large: "

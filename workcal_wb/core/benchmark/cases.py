@@ -159,12 +159,16 @@ def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
     workpiece region of a capture zoomed on the workpiece (the paper's second, zoomed capture; the
     calibration matches such a region), and for the car also the whole scene with platform and
     L-block around it, as the default capture framing both objects sees it."""
+    return list(iter_simulated_cases(seed, quick))
+
+
+def iter_simulated_cases(seed: int = 0, quick: bool = False):
+    """simulated_cases one at a time, made when asked for (a model's cases one after the other), so a
+    benchmark holds only the cases of the model it is matching."""
     from ..simulate.scanner import Scanner
     from ..simulate.scene import build_scene
 
-    cases = []
-    count = 2 if quick else 5
-    for i in range(count):
+    for i in range(2 if quick else 5):
         azimuth = -75.0 + 35.0 * i  # the side facing away from the L-block, which can hide the workpiece
         for workpiece in ("car", "figurine"):
             scene = build_scene(workpiece, seed=seed + i)
@@ -174,13 +178,13 @@ def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
             while zoomed.mask("workpiece").sum() < MIN_REGION_POINTS and turn < 360:  # hidden behind the L-block
                 turn += 30
                 zoomed = zoomed_on_workpiece(scene, azimuth + turn, seed + i).scan(scene)
-            cases.append(Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
-                              zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True))
+            yield Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
+                       zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True)
             if workpiece == "car":
+                del zoomed
                 scan = Scanner.aimed_at(scene, azimuth_deg=azimuth, seed=seed + i, noise_sigma_mm=0.1).scan(scene)
-                cases.append(Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model,
-                                  scan.U, exact=True))
-    return cases
+                yield Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model, scan.U,
+                           exact=True)
 
 
 def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: float = 45.0,

@@ -73,12 +73,15 @@ def bunny_folder(shared: Path | None) -> Path | None:
 
 
 def build_cases(shared: Path | None, seed: int, quick: bool):
-    """The bunny cases (when the shared data is there) and the simulated ones."""
-    from .cases import BUNNY_SCANS, bunny_cases, simulated_cases
+    """The bunny cases (when the shared data is there) and the simulated ones, the simulated ones made
+    when asked for: a process matching them holds only the current model's cases."""
+    from .cases import BUNNY_SCANS, bunny_cases, iter_simulated_cases
 
     folder = bunny_folder(shared)
     scans = ("bun000.ply", "bun045.ply") if quick else BUNNY_SCANS
-    return (bunny_cases(folder, seed, scans=scans) if folder else []) + simulated_cases(seed, quick=quick)
+    if folder:
+        yield from bunny_cases(folder, seed, scans=scans)
+    yield from iter_simulated_cases(seed, quick=quick)
 
 
 def _run_method(method: str, shared, seed: int, quick: bool, queue) -> None:
@@ -140,21 +143,35 @@ def _in_child(target, *args):
 
 def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print,
         only: str | None = None, runner=None) -> Report:
-    """Run both methods (alternating, ``rounds`` times each) and the verdicts, write the Markdown to
-    ``out``; with ``only="verdicts"`` run just the verdicts and replace that section of ``out``.
-    ``runner`` (parallel.Runner) is where the verdicts' and scenes' batches run (default: here, one
-    after the other); the timed tables always run one case at a time."""
+    """Run both methods (alternating, ``rounds`` times each), then the other tables, and write the
+    Markdown to ``out``; with ``only`` ("matcher", "large", "processes", "verdicts" or "scenes") run
+    just that table and replace its part of ``out``.  ``runner`` (parallel.Runner) is where the
+    verdicts' and scenes' batches run (default: here, one after the other); the timed tables always
+    run one case at a time."""
     from ..parallel import Runner
 
     runner = runner or Runner(workers=1)
+    tables = {"matcher": lambda: _matcher(shared, seed, quick, log),
+              "large": lambda: _large(seed, quick, log),
+              "processes": lambda: _processes(shared, seed, quick, log),
+              "verdicts": lambda: _verdicts(shared, seed, quick, log, runner),
+              "scenes": lambda: _scenes(shared, seed, log, runner)}
     if only is not None:
-        section, missed = {"verdicts": lambda: _verdicts(shared, seed, quick, log, runner),
-                           "scenes": lambda: _scenes(shared, seed, log, runner),
-                           "processes": lambda: _processes(shared, seed, quick, log),
-                           "large": lambda: _large(seed, quick, log)}[only]()
+        section, missed = tables[only]()
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
         atomic_write_text(out, _with_section(previous, section))
         return Report(section, missed)
+    # The quick subset leaves out the large scans and the scenes.
+    names = ["matcher", "processes", "verdicts"] if quick else list(tables)
+    parts = [tables[name]() for name in names]
+    report = Report("\n".join(text for text, _ in parts), [m for _, missed in parts for m in missed])
+    atomic_write_text(out, report.text)
+    return report
+
+
+def _matcher(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
+    """The matcher table (both methods over the same cases, alternating rounds) with the G-code
+    throughput, and the targets it missed."""
     rounds = 1 if quick else 2
     per_method = {m: ([], 0.0) for m in METHODS}
     for r in range(rounds):
@@ -170,16 +187,7 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
     note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
                                               "the bunny cases were skipped.")
     report = _table(per_method, seed, quick, rounds, note, gcode)
-    sections = [_processes(shared, seed, quick, log), _verdicts(shared, seed, quick, log, runner)]
-    if not quick:
-        sections.insert(0, _large(seed, quick, log))
-    for section, missed in sections:
-        report = Report(report.text + "\n" + section, report.missed + missed)
-    if not quick:
-        section, missed = _scenes(shared, seed, log, runner)
-        report = Report(report.text + "\n" + section, report.missed + missed)
-    atomic_write_text(out, report.text)
-    return report
+    return report.text, report.missed
 
 
 VERDICTS_HEADING = "## Verdicts"
@@ -190,15 +198,17 @@ SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING) 
 
 
 def _with_section(previous: str, section: str) -> str:
-    """``previous`` (a benchmarks page) with ``section`` (one of SECTIONS, by its heading line) put in
-    place of its old version, or added where it belongs; the other parts are kept as they were."""
+    """``previous`` (a benchmarks page) with ``section`` (one of SECTIONS, by its heading line, or the
+    matcher table that comes before them) put in place of its old version, or added where it belongs;
+    the other parts are kept as they were."""
     import re
 
     starts = sorted((m.start(), h) for h in SECTIONS for m in [re.search(rf"^{re.escape(h)}$", previous, re.M)] if m)
     parts = {None: previous[:starts[0][0]] if starts else previous}
     for (at, heading), (end, _) in zip(starts, starts[1:] + [(len(previous), None)]):
         parts[heading] = previous[at:end]
-    parts[section.split("\n", 1)[0]] = section
+    heading = section.split("\n", 1)[0]
+    parts[heading if heading in SECTIONS else None] = section  # anything else is the matcher table, first
     ordered = [parts[None]] + [parts[h] for h in SECTIONS if h in parts]
     return "\n\n".join(p.strip("\n") for p in ordered if p.strip()) + "\n"
 
@@ -371,8 +381,8 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
         "",
         "Peak memory: each method's own process (a fresh interpreter, started for it alone), its largest "
         "resident set (VmHWM) over all the cases of a round, the largest over the rounds. It includes Python, "
-        "numpy, scipy and open3d, every case's scan and model (all generated in the process before the first "
-        "match) and the current model's prepared form: "
+        "numpy, scipy and open3d, the cases at hand (the bunny's scans, read and degraded together; each "
+        "simulated model's scans made when its turn comes) and the current model's prepared form: "
         + ", ".join(f"{m} {mem:.0f} MB" for m, (_, mem) in per_method.items()) + ".",
         "",
     ]
