@@ -879,8 +879,7 @@ class _Thinning:
             self.count += len(index)
             if self.count and self.count >= min(GRID_SAMPLE, self.total - self.dropped):
                 values, index = self._joined()
-                self.grid = _ThinningGrid(values[:GRID_SAMPLE, :3], self.total, self.target)
-                self.seen = np.zeros(0, np.int64)
+                self.grid, self.count = _ThinningGrid(values[:GRID_SAMPLE, :3], self.total, self.target), 0
             else:
                 return
         keys, first = np.unique(self.grid.keys(values[:, :3], index), return_index=True)
