@@ -4,7 +4,8 @@ Each method runs in its own fresh process (so its peak memory is its own) over t
 generated deterministically from the seed in each process.  The model side is prepared once per
 model in each process, outside the timing, as a shop matching scan after scan against one model
 would: WorkCal's SurfaceModel with its coarse features and nearest-sample grid (match.prepare),
-stock's voxel grid, normals and FPFH of the model and the full model cloud with normals.  The
+stock's voxel grid, normals and FPFH of the model and the full model cloud with normals; it is let
+go when the cases move on to the next model, and the simulated cases are made one model at a time.  The
 processes alternate (WorkCal, stock, WorkCal, stock, ...) and a case's time is its fastest round,
 so a burst of load on the shared machine does not land on one method only.
 """
