@@ -195,9 +195,14 @@ class NearestGrid:
 
             near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1)
             del occupied
-            keys = self._keys(np.argwhere(near))
+            # A slab of bricks at a time: the near cells' indices of a whole grid are tens of MB.
+            step = BRICK * max(1, FILL_CHUNK // (BRICK * int(self.dims[1]) * int(self.dims[2])))
+            for start in range(0, int(self.dims[0]), step):
+                ijk = np.argwhere(near[start:start + step])
+                ijk[:, 0] += start
+                keys = self._keys(ijk)
+                self._fill(keys[self.stored(keys) == _UNKNOWN])
             del near
-            self._fill(keys[self.stored(keys) == _UNKNOWN])
             # Every near cell is filled now: what is still unknown is far from the model.
             rows = self._rows[2:self._used]
             rows[rows == _UNKNOWN] = _FAR
