@@ -15,7 +15,7 @@ XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
 .PHONY: setup python-packages peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
-        bench-scenes bench-processes clean
+        bench-scenes bench-processes bench-large bench-matcher clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -60,6 +60,14 @@ bench: setup peers
 # Only the whole-process table (match and calibrate as processes, cold and warm, beside the peers).
 bench-processes: setup peers
 	$(PYTHON) -m workcal_wb bench --only processes --out $(CURDIR)/docs/benchmarks.md
+
+# Only the matcher table (WorkCal beside stock Open3D, same cases; the G-code throughput), replacing the top of docs/benchmarks.md.
+bench-matcher: setup
+	$(PYTHON) -m workcal_wb bench --only matcher --out $(CURDIR)/docs/benchmarks.md
+
+# Only the large-scan table (match as a process on 5M- and 20M-point PLY scans, written once into build/bench-large).
+bench-large: setup
+	$(PYTHON) -m workcal_wb bench --only large --out $(CURDIR)/docs/benchmarks.md
 
 # Only the verdicts table (a few minutes), replacing its section of docs/benchmarks.md.
 bench-verdicts: setup

@@ -56,12 +56,31 @@ def _rows(method, success=True, time_s=0.1, group="bunny clean"):
 
 def test_table_reports_met_and_missed_targets():
     good = _table({WORKCAL: (_rows(WORKCAL, time_s=0.1), 300.0), STOCK: (_rows(STOCK, time_s=0.3), 400.0)},
-                  [], seed=0, quick=True, rounds=1, note=None)
+                  seed=0, quick=True, rounds=1, note=None)
     assert not good.missed and "all met" in good.text and "| 0.33 |" in good.text
-    slow_and_wrong = _table({WORKCAL: (_rows(WORKCAL, success=False, time_s=0.2), 300.0),
-                             STOCK: (_rows(STOCK, time_s=0.3), 400.0)}, [], seed=0, quick=True, rounds=1, note=None)
+    assert "WorkCal 300 MB, Open3D stock 400 MB" in good.text
+    slow_and_wrong = _table({WORKCAL: (_rows(WORKCAL, success=False, time_s=0.2), 500.0),
+                             STOCK: (_rows(STOCK, time_s=0.3), 400.0)}, seed=0, quick=True, rounds=1, note=None)
     assert any("success 75%" in m for m in slow_and_wrong.missed)
     assert any("0.67 x stock" in m for m in slow_and_wrong.missed)
+    assert any("WorkCal 500 MB above stock's 400 MB" in m for m in slow_and_wrong.missed)
+
+
+def test_large_scan_table_flags_missed_targets():
+    from workcal_wb.core.benchmark.large import table
+
+    def row(scan, run, time_s, peak_mb, status="ok", rotation=0.001):
+        return {"scan": scan, "run": run, "file_points": 5_003_516, "file_mb": 60.0, "used_points": 5_003_516,
+                "status": status, "rotation_error_deg": rotation, "displacement_mm": 0.01, "time_s": time_s,
+                "peak_mb": peak_mb, "thinned": []}
+
+    text, missed = table([row("5M", "cold", 9.0, 700), row("5M", "warm", 3.9, 700),
+                          row("20M", "warm", 30.0, 900)], (1.0, 2.0))
+    assert not missed and "All met." in text and "| 5M | 5,003,516 | 60 | warm | 5,003,516 | ok |" in text
+    text, missed = table([row("5M", "warm", 5.2, 700), row("20M", "cold", 30.0, 1600, "ambiguous", 2.0)], ())
+    assert missed == ["large scans: 5M warm: 5.20 s (target under 5 s)",
+                      "large scans: 20M cold: peak memory 1600 MB (target under 1500 MB)",
+                      "large scans: 20M cold: ambiguous, 2.0000 deg, 0.010 mm from the truth"]
 
 
 @pytest.fixture(scope="module")
@@ -145,6 +164,9 @@ def test_a_section_replaces_its_old_version_and_keeps_the_rest():
     assert replaced == added.replace("first", "second")
     assert _with_section(replaced, "## Scenes\n\nnew\n") == replaced.replace("\nscenes\n", "\nnew\n")
     assert _with_section("", "## Scenes\n\nonly\n") == "## Scenes\n\nonly\n"
+    assert _with_section(replaced, "# Benchmark\n\nnew table\n") == replaced.replace("## Summary\n\nold table", "new table")
+    assert _with_section(replaced, "## Large scans\n\nbig\n") == replaced.replace(
+        "## Whole processes", "## Large scans\n\nbig\n\n## Whole processes")
 
 
 def test_peers_read_the_files_workcal_writes(tmp_path):

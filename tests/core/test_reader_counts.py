@@ -189,3 +189,37 @@ def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
     (tmp_path / "seen.ply").write_bytes(data.replace(b"comment written by WorkCal", b"comment viewpoint 1 2 3", 1))
     seen = readers.read_cloud(tmp_path / "seen.ply", units="cm", max_points=10000)
     assert np.array_equal(seen.sensors, [[10.0, 20.0, 30.0]]) and len(seen) < 60000
+
+
+def test_thinning_while_reading_does_not_depend_on_the_chunk_size(tmp_path):
+    """Read in chunks of a few hundred records or in one, a large scan thins to the very same points
+    (the first of each voxel of one grid over the whole file), with non-finite points and a stray point
+    far away, and each read says so.  (The grid was sized from the first chunk and grown by sqrt(2),
+    so what was kept depended on how the file was cut.)"""
+    from workcal_wb.core import readers
+    from workcal_wb.core.geometry import Cloud
+
+    rng = np.random.default_rng(5)
+    u, v = rng.random((2, 40000)) * 80
+    points = np.column_stack([u, v, 4 * np.cos(v / 9) + rng.normal(0, 0.05, len(u))])
+    points[::997] = np.nan
+    points[12345] = [5e4, 0.0, 0.0]  # beyond the grid's reach: kept as it is
+    path = tmp_path / "scan.ply"
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\nproperty float x\n"
+              "property float y\nproperty float z\nend_header\n").encode()
+    path.write_bytes(header + points.astype("<f4").tobytes())
+    reads = []
+    for chunk in (333, 1 << 20):
+        kept_chunk = readers.THIN_CHUNK
+        try:
+            readers.THIN_CHUNK = chunk
+            reads.append(readers.read_cloud(path, max_points=8000))
+        finally:
+            readers.THIN_CHUNK = kept_chunk
+    small, whole = reads
+    assert np.array_equal(small.points, whole.points) and small.warnings == whole.warnings
+    assert 1000 < len(whole) <= 4000 and [5e4, 0.0, 0.0] in whole.points.tolist()
+    assert any(f"40,000 points, more than the 8,000 read whole: thinned while reading to {len(whole):,}" in w
+               for w in whole.warnings), whole.warnings
+    assert any("ignored 41 points with NaN" in w for w in whole.warnings), whole.warnings
+    assert np.isin(whole.points.astype("<f4").view("<V12"), points.astype("<f4").view("<V12")).all()

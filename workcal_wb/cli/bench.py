@@ -16,20 +16,23 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "bench", help="benchmark the matcher against stock Open3D and write the table (docs/benchmarks.md)",
         description="Match the benchmark cases (Stanford bunny scans with noise, partial overlap, clutter and clay "
-                    "changes; simulated scans with exact truth; one scan of about 2 million points) with WorkCal and "
+                    "changes; simulated scans with exact truth) with WorkCal and "
                     "with Open3D's tutorial pipeline in the same run, and write success rates, errors, times, "
-                    "peak memory and the time ratio as Markdown; then the verdicts table (real Stanford dragon and "
+                    "peak memory and the time ratio as Markdown; then the large-scan table (match as a process on "
+                    "5M- and 20M-point files), the verdicts table (real Stanford dragon and "
                     "bunny scans, simulated nearly symmetric parts: how often each status comes with the right pose), the "
                     "whole-process table (match and calibrate as processes, cold and warm, beside stock Open3D and "
                     "KISS-Matcher + small_gicp) and the scenes table. "
                     "Exit status 1 when WorkCal misses a target or reports a wrong pose as ok.")
     p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
     p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
-    p.add_argument("--only", choices=("verdicts", "scenes", "processes"),
-                   help="run only this table and replace its section of FILE (verdicts: how often each match status "
+    p.add_argument("--only", choices=("matcher", "large", "processes", "verdicts", "scenes"),
+                   help="run only this table and replace its section of FILE (matcher: WorkCal's matcher beside "
+                        "stock Open3D on the bunny and simulated cases, with the G-code throughput; verdicts: how often each match status "
                         "comes with the right pose, on real scans and nearly symmetric parts; scenes: cell scans in "
                         "any frame, touching objects, any view, calibrated with automatic regions; processes: the "
-                        "match and calibrate commands as whole processes, cold and warm, beside the peers)")
+                        "match and calibrate commands as whole processes, cold and warm, beside the peers; large: "
+                        "match as a whole process on 5M- and 20M-point scan files, written once into build/)")
     p.add_argument("--seed", type=seed, default=0, help="seed for the case generation and the matchers")
     add_runner_options(p, "verdicts' and scenes' matches and calibrations")
     p.add_argument("--shared", metavar="DIR", type=Path,

@@ -142,15 +142,20 @@ def _crc(cloud: Cloud) -> int:
 
 
 def _duplicates(points: np.ndarray) -> np.ndarray:
-    """Mask of points equal to an earlier point.  A hash of the coordinate bits buckets the points;
-    only those sharing a bucket are sorted by it (stably) and compared exactly with their neighbours,
-    so a collision cannot merge two points and a million unique points are not sorted at all."""
-    with np.errstate(over="ignore"):
-        x, y, z = ((points[:, k] + 0.0).view(np.int64) for k in range(3))  # + 0.0: -0.0 as 0.0
-        key = x * 1000003 + y * 999983 + z
-    buckets = 1 << int(np.clip(np.ceil(np.log2(2 * len(points) + 1)), 10, 23))
-    bucket = key & (buckets - 1)
-    order = np.flatnonzero(np.bincount(bucket, minlength=buckets)[bucket] > 1)
+    """Mask of points equal to an earlier point.  Hashes of the coordinate bits bucket the points, and
+    only those sharing a bucket under each of a few hashes are sorted by their key (stably) and
+    compared exactly with their neighbours, so a collision cannot merge two points and millions of
+    unique points are never sorted."""
+    key = np.zeros(len(points), np.int64)
+    for k, factor in enumerate((1000003, 999983, 1)):  # one column's copy at a time; + 0.0: -0.0 as 0.0
+        key += (points[:, k] + 0.0).view(np.int64) * factor
+    order = np.arange(len(points))  # the candidates, ascending
+    # A bucket is the top bits of a multiplicative hash of the key: the key's low bits are all zero for
+    # coordinates that were float32 (most scanners' files), so they would put every point in one bucket.
+    for multiplier in _BUCKET_HASHES:
+        bits = int(np.clip(np.ceil(np.log2(2 * len(order) + 1)), 10, 23))
+        bucket = ((key[order].view(np.uint64) * np.uint64(multiplier)) >> np.uint64(64 - bits)).astype(np.intp)
+        order = order[np.bincount(bucket, minlength=1 << bits)[bucket] > 1]
     order = order[np.argsort(key[order], kind="stable")]
     later, earlier = order[1:], order[:-1]
     pairs = np.flatnonzero(key[later] == key[earlier])
@@ -159,6 +164,10 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
     mask = np.zeros(len(points), bool)
     mask[later[same]] = True
     return mask
+
+
+# Odd 64-bit multipliers (the golden ratio's and two of xxHash's primes), one per bucketing pass.
+_BUCKET_HASHES = (0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9)
 
 
 def shape_kind(points: np.ndarray) -> str:

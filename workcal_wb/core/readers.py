@@ -75,7 +75,7 @@ def read_cloud(path, units: str | None = "mm", name: str | None = None, unit_opt
         except InputError as exc:
             raise InputError(f"{label}: the file declares {exc}") from None
     with np.errstate(over="ignore"):  # a value too large in mm becomes inf: refused or dropped by checked
-        points = parsed.points * scale
+        points = parsed.points if scale == 1 else parsed.points * scale  # (no copy of millions of points in mm)
     sensors = None if parsed.sensors is None else parsed.sensors * scale
     cloud = checked(Cloud(points, parsed.normals, parsed.triangles, path.name, list(parsed.warnings), sensors,
                           parsed.sensor_of))
@@ -806,18 +806,20 @@ def _lzf_decompress(block: bytes, expected: int, label: str) -> bytes:
 # --- large scans: thinned while they are read -------------------------------------------------
 
 # A scan with more points than this is thinned on reading by the commands (a few million points fix a
-# pose as well as tens of millions, and memory stays bounded); thinning aims at half of it.
+# pose as well as tens of millions, and memory stays bounded); thinning keeps at most half of it.
 LARGE_SCAN_POINTS = 6_000_000
 THIN_CHUNK = 1 << 20  # records read at a time
+GRID_SAMPLE = 1 << 16  # the first finite points, whose spacing sizes the thinning grid
 _KEY_BITS = 21  # voxel index bits per axis
 
 
 def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
     """A binary PLY holding only vertices, more than ``max_points`` of them, read in chunks of
     THIN_CHUNK records and thinned as it is read: one point per voxel (the first in the file, a real
-    measurement with its normal), the voxel grown by sqrt(2) whenever more than max_points / 2 are
-    kept, so memory stays bounded whatever the file holds.  None for any other file (read whole as
-    usual).  The counts are checked both ways as for any PLY."""
+    measurement with its normal), the voxel doubled whenever more than max_points / 2 are kept, so
+    memory stays bounded whatever the file holds.  Doubled voxels nest, so the points kept are those
+    of the final grid over the whole file, whatever the chunk size.  None for any other file (read
+    whole as usual).  The counts are checked both ways as for any PLY."""
     if checked_input(path).stat().st_size < max_points * 12:  # under max_points vertices of 3 floats
         return None
     with open(path, "rb") as fh:
@@ -837,41 +839,84 @@ def _thinned_ply(path: Path, label: str, max_points: int) -> _Parsed | None:
             raise _trailing(label, f"byte {end} ({size - end} bytes more)", vertex.count, "vertices")
         fh.seek(header.body_start)
         columns = ["x", "y", "z"] + (["nx", "ny", "nz"] if {"nx", "ny", "nz"} <= set(names) else [])
-        grid, parts, count, dropped = None, [], 0, 0
+        thinning = _Thinning(vertex.count, max_points // 2, len(columns))
         for start in range(0, vertex.count, THIN_CHUNK):
             chunk = np.fromfile(fh, record, min(THIN_CHUNK, vertex.count - start))
-            values = np.column_stack([chunk[name] for name in columns]).astype(np.float64)
+            values = np.empty((len(chunk), len(columns)))
+            for k, name in enumerate(columns):  # one column at a time: no second copy of the chunk
+                values[:, k] = chunk[name]
             del chunk
-            finite = np.isfinite(values).all(axis=1)
-            dropped += len(values) - int(finite.sum())
-            values, index = values[finite], start + np.flatnonzero(finite)
-            if grid is None and len(values) >= 100:
-                grid = _ThinningGrid(values[:, :3], vertex.count, max_points // 2)
-            if grid is not None:
-                values, index = grid.first_per_voxel(values, index)
-            parts.append((values, index))
-            count += len(index)
-            if grid is not None and count > max_points // 2:  # voxels met in several chunks counted once,
-                values, index = grid.first_per_voxel(*(np.concatenate(part) for part in zip(*parts)))
-                while len(index) > max_points // 2:  # and while too many are kept, a coarser grid for all
-                    grid.voxel *= np.sqrt(2.0)
-                    values, index = grid.first_per_voxel(values, index)
-                parts, count = [(values, index)], len(index)
-    values, index = (np.concatenate(part) for part in zip(*parts))
-    if grid is not None:
-        values, index = grid.first_per_voxel(values, index)  # a voxel met in several chunks: its first point
+            thinning.add(values, start)
+    values, kept = thinning.result()
+    grid = thinning.grid
     warnings = [f"{label}: {vertex.count:,} points, more than the {max_points:,} read whole: thinned while "
-                f"reading to {len(index):,}, one point kept per voxel of "
+                f"reading to {kept:,}, one point kept per voxel of "
                 f"{grid.voxel if grid is not None else 0:.3g} (the file's units)"]
-    if dropped:
-        warnings.append(f"{label}: ignored {dropped} points with NaN or infinite coordinates")
+    if thinning.dropped:
+        warnings.append(f"{label}: ignored {thinning.dropped} points with NaN or infinite coordinates")
     return _Parsed(values[:, :3], values[:, 3:] if values.shape[1] == 6 else None, None, header.units,
                    tuple(warnings), None if header.viewpoint is None else header.viewpoint[None])
 
 
+class _Thinning:
+    """The points kept so far (file order) and the sorted keys of their voxels: a chunk adds the first
+    point of each voxel no earlier point reached; past ``target`` points the voxel doubles."""
+
+    def __init__(self, total: int, target: int, width: int):
+        self.total, self.target = total, target
+        self.grid: _ThinningGrid | None = None
+        self.parts = [(np.zeros((0, width)), np.zeros(0, np.int64))]  # (values, file index)
+        self.count = 0  # points in parts
+        self.seen = np.zeros(0, np.int64)  # sorted keys of the voxels kept
+        self.dropped = 0  # non-finite points
+
+    def add(self, values: np.ndarray, start: int) -> None:
+        finite = np.isfinite(values).all(axis=1)
+        self.dropped += len(values) - int(finite.sum())
+        values, index = values[finite], start + np.flatnonzero(finite)
+        if self.grid is None:  # kept whole until GRID_SAMPLE finite points (or the file's end) size the grid
+            self.parts.append((values, index))
+            self.count += len(index)
+            if self.count and self.count >= min(GRID_SAMPLE, self.total - self.dropped):
+                values, index = self._joined()
+                self.grid, self.count = _ThinningGrid(values[:GRID_SAMPLE, :3], self.total, self.target), 0
+            else:
+                return
+        keys, first = np.unique(self.grid.keys(values[:, :3], index), return_index=True)
+        new = ~_sorted_holds(self.seen, keys)
+        first = np.sort(first[new])
+        self.seen = np.insert(self.seen, np.searchsorted(self.seen, keys[new]), keys[new])
+        self.parts.append((values[first], index[first]))
+        self.count += len(first)
+        if self.count > self.target:
+            values, index = self._joined()
+            while len(index) > self.target:  # a doubled voxel holds whole voxels of the last grid
+                self.grid.voxel *= 2.0
+                self.seen, first = np.unique(self.grid.keys(values[:, :3], index), return_index=True)
+                first = np.sort(first)
+                values, index = values[first], index[first]
+            self.parts, self.count = [(values, index)], len(index)
+
+    def _joined(self):
+        values, index = (np.concatenate(column) for column in zip(*self.parts))
+        self.parts = []
+        return values, index
+
+    def result(self) -> tuple[np.ndarray, int]:
+        """The values kept (file order) and how many."""
+        values, index = self._joined()
+        return values, len(index)
+
+
+def _sorted_holds(sorted_keys: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    """Which of ``keys`` are in ``sorted_keys`` (ascending)."""
+    at = np.minimum(np.searchsorted(sorted_keys, keys), max(len(sorted_keys) - 1, 0))
+    return sorted_keys[at] == keys if len(sorted_keys) else np.zeros(len(keys), bool)
+
+
 class _ThinningGrid:
-    """Voxels fixed to the first chunk's corner, sized so that a surface sampled like that chunk keeps
-    about ``target`` points of ``total`` (points on a surface thin as the square of the voxel)."""
+    """Voxels fixed to the sample's corner, sized so that a surface sampled like it keeps about
+    ``target`` points of ``total`` (points on a surface thin as the square of the voxel)."""
 
     def __init__(self, points: np.ndarray, total: int, target: int):
         from .pointops import median_spacing
@@ -879,15 +924,13 @@ class _ThinningGrid:
         self.corner = points.min(axis=0)
         self.voxel = max(median_spacing(points) * np.sqrt(total / target), 1e-9)
 
-    def first_per_voxel(self, values: np.ndarray, index: np.ndarray):
-        """(values, file indices) of the first point (in file order: ``index`` ascends) in each voxel;
-        points beyond the grid's reach (stray points far away) are all kept."""
-        cells = np.floor((values[:, :3] - self.corner) / self.voxel) + (1 << (_KEY_BITS - 1))
+    def keys(self, points: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """Each point's voxel as one int64; a point beyond the grid's reach (a stray point far away)
+        gets a key of its own (-1 - its file index), so it is always kept."""
+        cells = np.floor((points - self.corner) / self.voxel) + (1 << (_KEY_BITS - 1))
         inside = ((cells >= 0) & (cells < 1 << _KEY_BITS)).all(axis=1)
         cells = np.where(inside[:, None], cells, 0).astype(np.int64)
-        keys = np.where(inside, (cells[:, 0] << 2 * _KEY_BITS) | (cells[:, 1] << _KEY_BITS) | cells[:, 2], -1 - index)
-        first = np.sort(np.unique(keys, return_index=True)[1])
-        return values[first], index[first]
+        return np.where(inside, (cells[:, 0] << 2 * _KEY_BITS) | (cells[:, 1] << _KEY_BITS) | cells[:, 2], -1 - index)
 
 
 # --- text point clouds --------------------------------------------------------------------------

@@ -12,6 +12,7 @@ computes is plain numpy arrays and numbers, so a cache of prepared models can st
 from __future__ import annotations
 
 import threading
+import weakref
 from functools import cached_property
 
 import numpy as np
@@ -194,9 +195,14 @@ class NearestGrid:
 
             near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1)
             del occupied
-            keys = self._keys(np.argwhere(near))
+            # A slab of bricks at a time: the near cells' indices of a whole grid are tens of MB.
+            step = BRICK * max(1, FILL_CHUNK // (BRICK * int(self.dims[1]) * int(self.dims[2])))
+            for start in range(0, int(self.dims[0]), step):
+                ijk = np.argwhere(near[start:start + step])
+                ijk[:, 0] += start
+                keys = self._keys(ijk)
+                self._fill(keys[self.stored(keys) == _UNKNOWN])
             del near
-            self._fill(keys[self.stored(keys) == _UNKNOWN])
             # Every near cell is filled now: what is still unknown is far from the model.
             rows = self._rows[2:self._used]
             rows[rows == _UNKNOWN] = _FAR
@@ -376,8 +382,13 @@ class SurfaceModel:
             self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._features[key]
 
-    def _tree(self) -> cKDTree:
-        return self.tree
+    @property
+    def _tree(self):
+        """A function returning the samples' KD-tree, for the grids to keep: it holds the model weakly (a
+        bound method would tie the model and its grids in a reference cycle, so a model let go would
+        keep its memory until the garbage collector's next full pass)."""
+        model = weakref.ref(self)
+        return lambda: model().tree
 
     # -- as plain data, for the model cache (model_cache.py) ---------------------------------------
 

@@ -34,9 +34,13 @@ def extent_warnings(points: np.ndarray, name: str, units: str, unit_option: str 
     low_corner, high_corner = np.percentile(sample, [1, 99], axis=0)
     bulk = float(np.linalg.norm(high_corner - low_corner))
     warnings = []
+    centre, distance = np.median(sample, axis=0), np.zeros(len(points))
     with np.errstate(over="ignore", invalid="ignore"):
-        offset = points - np.median(sample, axis=0)
-        distance = np.sqrt(offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1] + offset[:, 2] * offset[:, 2])
+        for k in range(3):  # a column at a time: no offset copy of millions of points
+            offset = points[:, k] - centre[k]
+            offset *= offset
+            distance += offset
+        distance = np.sqrt(distance, out=distance)
     stray = distance > STRAY_DISTANCE * max(bulk, 1e-9)
     if stray.any():
         warnings.append(f"{name}: {int(stray.sum())} of {len(points)} points lie far from all the others (up to "

@@ -159,12 +159,16 @@ def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
     workpiece region of a capture zoomed on the workpiece (the paper's second, zoomed capture; the
     calibration matches such a region), and for the car also the whole scene with platform and
     L-block around it, as the default capture framing both objects sees it."""
+    return list(iter_simulated_cases(seed, quick))
+
+
+def iter_simulated_cases(seed: int = 0, quick: bool = False):
+    """simulated_cases one at a time, made when asked for (a model's cases one after the other), so a
+    benchmark holds only the cases of the model it is matching."""
     from ..simulate.scanner import Scanner
     from ..simulate.scene import build_scene
 
-    cases = []
-    count = 2 if quick else 5
-    for i in range(count):
+    for i in range(2 if quick else 5):
         azimuth = -75.0 + 35.0 * i  # the side facing away from the L-block, which can hide the workpiece
         for workpiece in ("car", "figurine"):
             scene = build_scene(workpiece, seed=seed + i)
@@ -174,13 +178,13 @@ def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
             while zoomed.mask("workpiece").sum() < MIN_REGION_POINTS and turn < 360:  # hidden behind the L-block
                 turn += 30
                 zoomed = zoomed_on_workpiece(scene, azimuth + turn, seed + i).scan(scene)
-            cases.append(Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
-                              zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True))
+            yield Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
+                       zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True)
             if workpiece == "car":
+                del zoomed
                 scan = Scanner.aimed_at(scene, azimuth_deg=azimuth, seed=seed + i, noise_sigma_mm=0.1).scan(scene)
-                cases.append(Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model,
-                                  scan.U, exact=True))
-    return cases
+                yield Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model, scan.U,
+                           exact=True)
 
 
 def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: float = 45.0,
@@ -198,14 +202,58 @@ def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: flo
     return Scanner(position, centre, **{"pixel_pitch_mm": pitch, "noise_sigma_mm": 0.1, "seed": seed, **settings})
 
 
-def large_case(seed: int = 0) -> Case:
-    """About two million points (1.9 M): the car scanned at a 0.2 mm pitch, platform and L-block around it."""
+# --- Large scans as files (the large-scan table runs the commands on them as whole processes) ----
+
+LARGE_PITCH_MM = 0.2 / np.sqrt(2.64)  # about 5 million points per capture of large_scanner's view
+
+
+def large_scanner(scene, seed: int, pitch_mm: float = 0.2, shift_px=(0.0, 0.0)):
+    """The car with platform and L-block seen from 0.8 m, the image zoomed to ``pitch_mm`` at the car and
+    its window kept (the 0.2 mm capture is 1700 x 1300 pixels); ``shift_px`` moves the aim by a fraction
+    of a pixel, so several captures interleave like one of a finer pitch."""
     from ..simulate.scanner import Scanner
+
+    centre = scene.workpiece.in_base().points.mean(axis=0)
+    scale = 0.2 / pitch_mm
+    image_size = (round(1700 * scale), round(1300 * scale))
+    first = Scanner(centre + np.array([300.0, -300.0, 700.0]), centre, pixel_pitch_mm=pitch_mm,
+                    image_size=image_size, noise_sigma_mm=0.1, seed=seed)
+    across = first.frame()[:3, :2] @ np.asarray(shift_px, float) * pitch_mm
+    return Scanner(first.position, centre + across, pixel_pitch_mm=pitch_mm, image_size=image_size,
+                   noise_sigma_mm=0.1, seed=seed)
+
+
+def write_large_scan(path: Path, captures: int, seed: int = 0) -> np.ndarray:
+    """A binary PLY (float32 x y z, mm) of ``captures`` captures of the car scene at LARGE_PITCH_MM
+    (about 5 million points each), each aimed a fraction of a pixel off the first (a 2 x 2 interleave for
+    4), all in the first capture's frame S, as a scanner merges its shots; one capture is in memory at a
+    time.  Returns the true U = ^S X of the workpiece model (``large_model``)."""
     from ..simulate.scene import build_scene
 
     scene = build_scene("car", seed=seed)
-    centre = scene.workpiece.in_base().points.mean(axis=0)
-    scanner = Scanner(centre + np.array([300.0, -300.0, 700.0]), centre, pixel_pitch_mm=0.2,
-                      image_size=(1700, 1300), noise_sigma_mm=0.1, seed=seed)
-    scan = scanner.scan(scene)
-    return Case("car, 0.2 mm pitch", "large", scan.points, scene.workpiece_model(), scan.U, exact=True)
+    shifts = [(0.0, 0.0), (0.5, 0.5), (0.5, 0.0), (0.0, 0.5)][:captures]
+    scans = [large_scanner(scene, seed + k, LARGE_PITCH_MM, shift) for k, shift in enumerate(shifts)]
+    S_B = frames.invert(scans[0].frame())
+    parts = []
+    for scanner in scans:  # float32 in the first frame: 12 bytes a point kept, one capture's arrays at a time
+        capture = scanner.scan(scene)
+        parts.append(frames.apply(S_B @ capture.B_S, capture.points).astype("<f4"))
+        del capture
+    count = sum(map(len, parts))
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment units mm\ncomment {captures} simulated capture(s) "
+              f"of the car scene, seed {seed}\nelement vertex {count}\nproperty float x\nproperty float y\n"
+              "property float z\nend_header\n").encode()
+    partial = Path(f"{path}.part")  # renamed when whole: an interrupted run leaves no file to reuse
+    with open(partial, "wb") as fh:
+        fh.write(header)
+        for part in parts:
+            fh.write(part.tobytes())
+    partial.replace(path)
+    return S_B @ scene.W
+
+
+def large_model(seed: int = 0) -> Cloud:
+    """The workpiece model of write_large_scan's scene."""
+    from ..simulate.scene import build_scene
+
+    return build_scene("car", seed=seed).workpiece_model()
