@@ -70,7 +70,7 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
     reach = threshold + REACH_TOLERANCES * tolerance_mm
     free, held = [], []
     for i in np.flatnonzero(vals < WEAK_RATIO):
-        twist = _unit_twist(vecs[:, i], centre, radius, moved[on])
+        twist = unit_twist(vecs[:, i], centre, radius, moved[on])
         interval = _edge_interval(frames.apply(T, points), surface, twist, centre, threshold, reach)
         if interval is None:
             if vals[i] < FREE_MOTION_RATIO:
@@ -84,7 +84,7 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
                "constrained": not free, "held_by_edges": held}
 
 
-def _unit_twist(v: np.ndarray, centre: np.ndarray, radius: float, points: np.ndarray) -> np.ndarray:
+def unit_twist(v: np.ndarray, centre: np.ndarray, radius: float, points: np.ndarray) -> np.ndarray:
     """A Gelfand eigenvector as (rotation vector rad/unit, translation mm/unit), scaled so that
     one unit moves ``points`` by 1 mm RMS: slack in those units is a distance."""
     twist = np.concatenate([v[:3] / radius, v[3:]])

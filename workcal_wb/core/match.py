@@ -30,12 +30,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import frames, global_search, pointops, visibility
-from .edges import centre_on_edges, has_weak_motion
+from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
 from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
 from .result import AMBIGUOUS, FAILED, OK, MatchResult
-from .stability import stability
+from .stability import gelfand, stability
 from .surface import SurfaceModel
 
 METHODS = ("robust", "icp", "hausdorff")
@@ -116,6 +116,11 @@ FAR_OFF_SIGMAS = 10.0
 # times the noise (right poses measured 1-2x; a pose slid along a curved part, held there by a few
 # points, 4x).
 FAR_OFF_FIT = 2.0
+# A pose fitting worse than FAR_OFF_FIT noises may rest in a local minimum a slide from home (a curved
+# tile turned 2.4 degrees along its curve: 4 noises, and 1 once home, which lay 3.4 mm RMS away): it
+# is refined again from these shifts (mm RMS over its matched points) either way along each motion
+# of its fit, and the best of those replaces it when its residual scale is at most HOME_GAIN times its own.
+HOME_SHIFTS_MM, HOME_GAIN = (2.0, 3.0), 0.5
 # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
 # samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
 PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
@@ -225,7 +230,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
         return (judge, *judge.rank(best, rivals, polish, widen,
                                    lambda state: _through_the_wall(state, medium, surface, gate),
-                                   lambda state: _turns_refined_like(state, medium, surface, gate, polish, widen)))
+                                   lambda state: _turns_refined_like(state, medium, surface, gate, polish, widen),
+                                   lambda state, noise: _slid_home(state, medium, surface, noise, polish)))
 
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
@@ -521,7 +527,7 @@ class Judge:
         if self.viewpoint is not None:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
-    def rank(self, best, rivals, polish, widen, through, turns):
+    def rank(self, best, rivals, polish, widen, through, turns, home=lambda state, noise: state):
         """(best state, [{"T", "evidence", "z", "far_z", "other_side", "turn"}, best first]): the poses not
         equivalent under the model's symmetries, weighed by view evidence.  Every pose is refined again
         from a wider gate first (``widen``): a fit can stop an edge's width off, its edge points dropped
@@ -546,6 +552,8 @@ class Judge:
         if on_part.sum() >= MIN_SCAN_POINTS:
             self.scan_noise = float(np.median(self.probe_noise[on_part]))
         self.noise = float(np.hypot(self.scan_noise, self.surface.noise_mm))
+        if self.options.method == "robust":
+            best = home(best, self.noise)
         sigma = best.sigma if np.isfinite(best.sigma) else self.noise
         self.gate = EVIDENCE_SIGMAS * max(sigma, self.noise, 1e-6)
         poses = [best] + rivals
@@ -572,7 +580,8 @@ class Judge:
                 if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
-            poses, weighed, turned = self._with_turns(poses, weighed, turns(poses[0]), polish)
+            poses, weighed, turned = self._with_turns(poses, weighed, [home(t, self.noise) for t in turns(poses[0])],
+                                                      polish)
         else:
             turned = [False] * len(poses)
         judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False,
@@ -787,6 +796,33 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     if not _moved(wide.T, state.T, medium.mean(axis=0), state.gate):
         return wide
     return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
+
+
+def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish):
+    """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
+    HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
+    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN) and keeps at
+    least as many scan points on the model.  A refinement that stopped in a local minimum (a pose
+    slid along a curved part: the scan points past the part's end pull it nowhere, point-to-plane)
+    is pulled home; a right pose (within FAR_OFF_FIT noises) is never touched."""
+    if not state.sigma > FAR_OFF_FIT * noise:
+        return state
+    moved = frames.apply(state.T, medium)
+    _, idx, found = surface.nearest_cell(moved, state.gate)
+    if found.sum() < MIN_SCAN_POINTS:
+        return state
+    _, vecs, centre, radius = gelfand(moved[found], surface.normals[idx[found]])
+    home = state
+    for v in vecs.T:
+        twist = unit_twist(v, centre, radius, moved[found])
+        for amount in (*HOME_SHIFTS_MM, *(-a for a in HOME_SHIFTS_MM)):
+            tried = refine(medium, surface, slide(twist, centre, amount) @ state.T, state.gate, state.scale)
+            if tried.sigma < home.sigma:
+                home = tried
+    if home is state or not home.sigma <= HOME_GAIN * state.sigma:
+        return state
+    before, after = inlier_scores(medium, surface, [state.T, home.T], state.gate)
+    return polish(home) if after >= before else state
 
 
 def _contradicted(evidence: visibility.Evidence) -> float:
