@@ -83,6 +83,15 @@ def test_the_matches_that_located_the_objects_are_the_final_ones(car):
     assert result.matches == [True, True]
 
 
+def test_a_paper_method_is_the_method_of_both_final_matches(plain):
+    """Review of issue 15: the located match (robust, as regions are found) was kept as the final one
+    whatever method the user chose, so an icp calibration reported robust matches."""
+    scene, scan = plain
+    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(),
+                       options=CalibrationOptions(method="icp", resamples=1))
+    assert (result.workpiece.method, result.reference.method) == ("icp", "icp")
+
+
 def test_user_regions_give_the_same_W(car):
     scene, scan, _, automatic = car
     regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}

@@ -243,10 +243,12 @@ def _region_cloud(scan: Cloud, idx: np.ndarray, role: str) -> Cloud:
 def _refit(scan, idx, surface, found: MatchResult, matched: np.ndarray, options: dict, role: str) -> MatchResult:
     """The match on the final region: the one that found it when it was made on the region's points
     but for a few (at most KEPT_MATCH_EXTRA of them: specks near the placed model, clusters too
-    small to search, that joined it) and with the same options (but the lower fitness a candidate
-    cluster is allowed, which it already passes); else a match again from its pose."""
-    if (np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) <= KEPT_MATCH_EXTRA * len(idx)
-            and found.fitness >= MatchOptions.min_fitness):
+    small to search, that joined it), with the robust method regions are found with (the paper's
+    methods match again) and the fitness a match asks (a candidate cluster is allowed less); else a
+    match again from its pose."""
+    if (options.get("method", "robust") == "robust"
+            and np.isin(matched, idx).all() and len(idx) - len(np.unique(matched)) <= KEPT_MATCH_EXTRA * len(idx)
+            and found.fitness >= options.get("min_fitness", MatchOptions.min_fitness)):
         return replace(found, scan_name=f"{role} region of {scan.name}")
     return refit(_region_cloud(scan, idx, role), surface, found, options)
 
@@ -306,11 +308,12 @@ def _start_gate(points: np.ndarray, surface: SurfaceModel, seed: int) -> float:
     """The gate a match of these region points starts a given pose's refinement at: its coarse voxel
     (see match._match)."""
     rng = np.random.default_rng(seed)
+    count = len(points)  # the spacing is the whole region's, as a match measures it
     if len(points) > MatchOptions.max_fine_points:
         points = points[rng.choice(len(points), MatchOptions.max_fine_points, replace=False)]
     medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
     probes, _, radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
-    spacing = float(np.median(radius)) / 2 * np.sqrt(len(medium) / len(points)) if len(probes) else 0.0
+    spacing = float(np.median(radius)) / 2 * np.sqrt(len(medium) / count) if len(probes) else 0.0
     return max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
 
 

@@ -585,21 +585,27 @@ class Judge:
         else:
             turned = [False] * len(poses)
         judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False,
-                   "turn": False}]
+                   "turn": False, "fits": self._fits(poses[0])}]
         best_distances = self._distances(poses[0].T) if len(poses) > 1 else None  # no rival: no far-off test
         for p, e, t in zip(poses[1:], weighed[1:], turned[1:]):
             judged.append({"T": p.T, "evidence": e, "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR),
                            "far_z": self._far_off(best_distances, p.T),
-                           "other_side": self._from_the_other_side(poses[0].T, p.T), "turn": t})
+                           "other_side": self._from_the_other_side(poses[0].T, p.T), "turn": t,
+                           "fits": self._fits(p)})
         return poses[0], judged
+
+    def _fits(self, state) -> bool:
+        """Whether a refined pose fits the scan within FAR_OFF_FIT noises: only then are the points it
+        leaves far off evidence against it rather than a sign that it has not converged."""
+        return bool(state.sigma <= FAR_OFF_FIT * self.noise)
 
     def _with_turns(self, poses: list, weighed: list, turns: list, polish):
         """(poses, their evidence, whether each is a turn of the best refined like it): the best's
         near-symmetric turns (_turns_refined_like, not a symmetry of the model away from it) join the
         poses, each replacing the rivals it repeats (refined less); a rival that repeats the best is
         dropped.  A turn better than the best by the view evidence, or as good by it and leaving
-        significantly fewer scan points far off the part (far_off_test), becomes the best; the best it
-        replaces is then one of its turns."""
+        significantly fewer scan points far off the part (far_off_test) while both fit within
+        FAR_OFF_FIT noises, becomes the best; the best it replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
 
         def near(a, b) -> bool:
@@ -621,7 +627,8 @@ class Judge:
         best_distances = self._distances(poses[0].T)
         for i in sorted(range(1, len(turns) + 1), key=lambda i: -weighed[i].score):
             z = visibility.compare(weighed[0].cells, weighed[i].cells, CELL_VARIANCE_FLOOR)
-            if z < -sig or (z < sig and self._far_off(best_distances, poses[i].T) <= -sig):
+            if z < -sig or (z < sig and self._fits(poses[0]) and self._fits(poses[i])
+                            and self._far_off(best_distances, poses[i].T) <= -sig):
                 poses[0], poses[i] = poses[i], poses[0]
                 weighed[0], weighed[i] = weighed[i], weighed[0]
                 break
@@ -889,13 +896,13 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
     # The far-off test rules out only a turn of the best refined exactly like it (its flip, tried
     # always; one significantly better by the view's cells took the best's place, see Judge._with_turns),
-    # and only when the best fits the scan within its noise: a pose refined less (or a best that does
-    # not fit) can leave points far off by being unconverged, and on scans simulated by ray casting
-    # (open3d 0.19) ruling out such a right pose made a flip "ok".
-    fits = sigma <= FAR_OFF_FIT * judge.noise
-    rivals = [c for c in listed[1:]
+    # and only when both it and the best fit the scan within FAR_OFF_FIT noises: a pose refined less
+    # (or one that does not fit) can leave points far off by being unconverged, and on scans simulated
+    # by ray casting (open3d 0.19) ruling out such a right pose made a flip "ok".
+    fits = sigma <= FAR_OFF_FIT * judge.noise and judged[0]["fits"]
+    rivals = [c for c, entry in zip(listed[1:], judged[1:])
               if (c["standard_errors_below_best"] < significance
-                  and not (fits and c["turn_of_best"] and c["far_off_standard_errors"] >= significance))
+                  and not (fits and entry["fits"] and c["turn_of_best"] and c["far_off_standard_errors"] >= significance))
               or c["far_off_standard_errors"] <= -significance or c["from_the_other_side"]
               or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
     for c in rivals:
