@@ -321,7 +321,7 @@ def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, ga
                 options: CalibrationOptions, match_options: dict) -> np.ndarray:
     """U refined on resampled region points from a nudged start, the way a match refines a given
     start (coarse to fine on a medium subset from the coarse voxel's ``gate``, finished on all the
-    points, then slid home from a wider gate) without the verdict around it: a refit needs the pose
+    points, then refined again from a wider gate, match._widened) without the verdict around it: a refit needs the pose
     alone.  The paper's methods refit through their match."""
     if options.method != "robust":
         return match_pose(Cloud(points, name="resample"), surface, start, **match_options)

@@ -17,7 +17,9 @@ motion, and no rival is within the statistical noise of its evidence (given the 
 cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
 The verdict's best has its near-symmetric turns tried again, each refined exactly like it
 (_turns_refined_like): one of them is the right pose when the search handed over a flip, and only
-such a turn, as converged as the best, is no rival when it leaves significantly more points far off; a
+such a turn, as converged as the best and with both fitting within FAR_OFF_FIT noises, is no rival
+when it leaves significantly more points far off (or takes the best's place when it leaves
+significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home); a
 model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
 symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
@@ -895,7 +897,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
     significance = options.rival_significance
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
     # The far-off test rules out only a turn of the best refined exactly like it (its flip, tried
-    # always; one significantly better by the view's cells took the best's place, see Judge._with_turns),
+    # always; one significantly better by the view's cells, or as good by them and leaving significantly
+    # fewer points far off, took the best's place, see Judge._with_turns),
     # and only when both it and the best fit the scan within FAR_OFF_FIT noises: a pose refined less
     # (or one that does not fit) can leave points far off by being unconverged, and on scans simulated
     # by ray casting (open3d 0.19) ruling out such a right pose made a flip "ok".
