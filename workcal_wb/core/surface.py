@@ -12,7 +12,6 @@ computes is plain numpy arrays and numbers, so a cache of prepared models can st
 from __future__ import annotations
 
 import threading
-import weakref
 from functools import cached_property
 
 import numpy as np
@@ -237,6 +236,25 @@ class NearestGrid:
         return grid
 
 
+class _SampleTree:
+    """The samples' KD-tree, built on first call, shared by a model and its grids.  It holds the
+    samples, not the model: a bound method would tie the model and its grids in a reference cycle
+    (a model let go would keep its memory until the garbage collector's next full pass), and a weak
+    reference to the model would leave a grid that outlives it (a copied model's, one kept alone)
+    without its samples."""
+
+    def __init__(self, points: np.ndarray):
+        self.points, self._built = points, None
+
+    def __call__(self) -> cKDTree:
+        if self._built is None:
+            self._built = cKDTree(self.points)
+        return self._built
+
+    def __getstate__(self) -> dict:
+        return {"points": self.points, "_built": None}  # a copy builds its own tree when it needs one
+
+
 class SurfaceModel:
     """Samples (mm) with unit outward normals and a KD-tree, the model's symmetries; coarse features
     cached per voxel size.
@@ -272,6 +290,7 @@ class SurfaceModel:
                 normals = pointops.orient_outward(points, pointops.estimate_normals(points, 3 * spacing))
             weights = np.ones(len(points))
         self.points, self.normals, self.spacing = points, normals, spacing
+        self._tree = _SampleTree(points)
         self.warnings = list(model.warnings)
         self.vertices = model.points
         self.triangles = model.triangles
@@ -293,10 +312,10 @@ class SurfaceModel:
         self._grids: dict[int, NearestGrid] = {}  # level -> the nearest-sample grid for its gates
         self._custom_grids: dict[tuple, NearestGrid] = {}  # (cell, bound) -> a grid of its own
 
-    @cached_property
+    @property
     def tree(self) -> cKDTree:
         """KD-tree of the samples (built when first needed: a model from the cache may never need it)."""
-        return cKDTree(self.points)
+        return self._tree()
 
     def symmetries(self) -> list[str]:
         """The model's symmetries in words (model frame), e.g. "turning the part 90 degrees about its
@@ -382,13 +401,6 @@ class SurfaceModel:
             self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._features[key]
 
-    @property
-    def _tree(self):
-        """A function returning the samples' KD-tree, for the grids to keep: it holds the model weakly (a
-        bound method would tie the model and its grids in a reference cycle, so a model let go would
-        keep its memory until the garbage collector's next full pass)."""
-        model = weakref.ref(self)
-        return lambda: model().tree
 
     # -- as plain data, for the model cache (model_cache.py) ---------------------------------------
 
@@ -428,6 +440,7 @@ class SurfaceModel:
         n = len(arrays["points"])
         take = _Arrays(arrays)
         self.points, self.normals = take("points", "f8", (n, 3)), take("normals", "f8", (n, 3))
+        self._tree = _SampleTree(self.points)
         self.view_order = take("view_order", "i8", (n,))
         self.vertices = take("vertices", "f8", (None, 3))
         self.triangles = self.face_normals = None
