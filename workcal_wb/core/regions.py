@@ -108,7 +108,13 @@ def locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolera
 
     The scan may be in any frame: ``up`` (a direction) and ``viewpoint`` (the scanner's position),
     when known, say which side of the platform the objects stand on; otherwise the data do.
-    ``blas_threads``: as in MatchOptions."""
+    ``blas_threads``: as in MatchOptions, for the whole search (the platform's planes too)."""
+    with pointops.blas_threads(blas_threads):
+        return _locate(scan, workpiece, reference, tolerance_mm, seed, progress, up, viewpoint, blas_threads)
+
+
+def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, tolerance_mm: float, seed: int, progress,
+            up, viewpoint, blas_threads: int | None) -> Located:
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
