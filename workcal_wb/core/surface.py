@@ -345,13 +345,27 @@ class SurfaceModel:
     def nearest_cell(self, points: np.ndarray, gate: float):
         """Like ``nearest``, through the cell grid of the gate's level: each point gets its cell's
         nearest sample."""
+        d, idx, found, _ = self._cell_offsets(points, gate)
+        return d, idx, found
+
+    def tangent_planes(self, points: np.ndarray, gate: float):
+        """(found, residuals, normals): which points ``nearest_cell`` finds, and for those, their
+        ``plane_residuals`` and their samples' normals, each sample array gathered once (a
+        refinement step asks for all three)."""
+        _, idx, found, offset = self._cell_offsets(points, gate)
+        normals = self.normals[idx[found]]
+        return found, np.einsum("ij,ij->i", offset[found], normals), normals
+
+    def _cell_offsets(self, points: np.ndarray, gate: float):
+        """(distance, sample index, found, offset from the sample) through the gate's cell grid."""
         level = max(0, int(np.ceil(np.log2(gate / (GATE_CELLS * self.spacing)))))
         idx = self.grid_level(level).lookup(points)
         found = idx >= 0
         idx = np.where(found, idx, 0)
-        d = pointops.lengths(points - self.points[idx])
+        offset = points - self.points[idx]
+        d = pointops.lengths(offset)
         found &= d <= gate
-        return d, idx, found
+        return d, idx, found, offset
 
     def grid_level(self, level: int) -> NearestGrid:
         """The cell grid for gates up to GATE_CELLS x 2^level sample spacings (cached)."""
