@@ -97,8 +97,9 @@ class NearestGrid:
         self._used = 2
         self.complete = complete  # every cell filled (precompute)
         self.filled = 0  # cells filled by lookups and precompute since the grid was made or loaded
-        # One model may serve two threads at once in FreeCAD (a task panel's worker and a recompute):
-        # storing a brick moves rows and may reallocate ``_rows``, so reads and writes take turns.
+        # One model may serve two threads at once (in FreeCAD a task panel's worker and a recompute;
+        # calibration's bootstrap refits): storing a brick moves rows and may reallocate ``_rows``, so
+        # reads and writes take turns until the grid is complete.
         self._lock = threading.RLock()
 
     def __getstate__(self) -> dict:
@@ -167,15 +168,21 @@ class NearestGrid:
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Sample index per point, -1 where no sample lies within the bound of its cell."""
+        if self.complete:  # every cell filled (precompute): nothing is stored any more, so reads need no turn
+            return self._looked_up(points)
         with self._lock:
-            keys, inside = self._cells(points)
-            keys = np.where(inside, keys, 0)
-            stored = self.stored(keys)
-            unknown = (stored == _UNKNOWN) & inside
-            if unknown.any():
+            return self._looked_up(points)
+
+    def _looked_up(self, points: np.ndarray) -> np.ndarray:
+        keys, inside = self._cells(points)
+        keys = np.where(inside, keys, 0)
+        stored = self.stored(keys)
+        unknown = (stored == _UNKNOWN) & inside
+        if unknown.any():
+            with self._lock:
                 self._fill(keys[unknown])
                 stored = self.stored(keys)
-            return np.where(inside & (stored > 0), stored - 1, -1)
+        return np.where(inside & (stored > 0), stored - 1, -1)
 
     def known(self) -> int:
         """How many cells are stored filled."""
