@@ -294,7 +294,7 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
-    gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # (a gate not measured, nan: the first)
+    gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
     jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
              m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
             for _ in range(options.resamples) for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
