@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -18,8 +19,7 @@ from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
-from .match import (COARSE_VOXELS_PER_DIAGONAL, MEDIUM_POINTS, METHODS, NOISE_PROBES, MatchOptions, _moved, _polish,
-                    _widened, match, match_pose)
+from .match import MEDIUM_POINTS, METHODS, MatchOptions, match, match_pose, refine_given
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
@@ -64,6 +64,8 @@ class CalibrationOptions:
 
 # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
 UNCERTAINTY_FACTOR = 3.0
+# Threads the bootstrap refits run on.
+REFIT_THREADS = 2
 # Scans of one scene taken in the same units have extents within this factor of each other.
 UNIT_MISMATCH_RATIO = 8.0
 # A toolpath works on the part: its median distance to the model surface, as a fraction of the model
@@ -86,6 +88,14 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     raise errors.Cancelled to stop.  Bad input raises InputError; a calibration that cannot be
     trusted comes back with status "failed" or "ambiguous" and the reasons.
     """
+    # The whole of it on options.blas_threads, not only the matches: the bootstrap refits' small
+    # products on OpenBLAS's own threads took ten times as long on a busy machine (its threads spin).
+    with pointops.blas_threads(options.blas_threads):
+        return _calibrate(scans, workpiece, reference, regions, toolpath_points, options, progress)
+
+
+def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: CalibrationOptions,
+               progress) -> CalibrationResult:
     started = time.perf_counter()
     report = progress or (lambda fraction, message: None)
     scan = merge_scans(scans)
@@ -147,7 +157,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     U, V = U_match.matrix, V_match.matrix
     W = frames.invert(V) @ U
     report(0.75, "estimating the uncertainty")
-    uncertainty = _uncertainty(scan, region_idx, (workpiece_surface, reference_surface), (U, V), W,
+    uncertainty = _uncertainty(scan, region_idx, (workpiece_surface, reference_surface), (U_match, V_match), W,
                                toolpath_points, options, match_options)
     gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm)
     status, reasons = _status(U_match, V_match, gates)
@@ -259,16 +269,19 @@ def _inputs(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toolp
             "toolpath_points": 0 if toolpath_points is None else len(toolpath_points)}
 
 
-def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, match_options) -> dict:
+def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, match_options) -> dict:
     """Displacement bound of W at the toolpath and at the workpiece surface, from bootstrap refits.
 
     Each refit draws the points of both regions with replacement (as many as the match itself fits
     to) and refines both poses from a start nudged off the solution (half the tolerance at the model's
-    edge): where the data pins a pose the refit comes back; where it leaves a motion nearly free
+    edge), from the gate the match ended at (at least twice the tolerance, so that the nudge is within
+    it): where the data pins a pose the refit comes back; where it leaves a motion nearly free
     the refits stay spread, and so does W (a block seen on two faces is centred between its edges
     in every refit, see edges.py, so there the spread is how well its edges place it).  The bound is
     UNCERTAINTY_FACTOR times the RMS displacement over the refits.  The studies check it against the
-    true error (docs/studies.md).
+    true error (docs/studies.md).  The refits run on REFIT_THREADS threads (numpy lets go of the
+    interpreter in their array work); the draws and nudges are made first, in order, so the bound does
+    not depend on the threads.
     """
     rng = np.random.default_rng(options.seed + 1)
     roles = ("workpiece", "reference")
@@ -281,16 +294,15 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
-    gates = {role: _start_gate(scan.points[regions[role]], surface, options.seed)
-             for role, surface in zip(roles, surfaces)}
+    gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
+    jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
+             m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
+            for _ in range(options.resamples) for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
+    with ThreadPoolExecutor(max_workers=REFIT_THREADS) as pool:
+        refits = list(pool.map(lambda job: _refit_pose(*job), jobs))
     rotations = []
-    for _ in range(options.resamples):
-        refit = []
-        for role, surface, pose in zip(roles, surfaces, poses):
-            draw = scan.points[rng.choice(regions[role], n[role], replace=True)]
-            start = pose @ _nudge(surface, options.tolerance_mm / 2, rng)
-            refit.append(_refit_pose(draw, surface, start, gates[role], options, match_options))
-        W_r = frames.invert(refit[1]) @ refit[0]
+    for U_r, V_r in zip(refits[0::2], refits[1::2]):
+        W_r = frames.invert(V_r) @ U_r
         rotations.append(frames.rotation_between_deg(W_r, W))
         for key, p in targets.items():
             spread[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
@@ -304,35 +316,18 @@ def _uncertainty(scan, regions, surfaces, poses, W, toolpath_points, options, ma
     return out
 
 
-def _start_gate(points: np.ndarray, surface: SurfaceModel, seed: int) -> float:
-    """The gate a match of these region points starts a given pose's refinement at: its coarse voxel
-    (see match._match)."""
-    rng = np.random.default_rng(seed)
-    count = len(points)  # the spacing is the whole region's, as a match measures it
-    if len(points) > MatchOptions.max_fine_points:
-        points = points[rng.choice(len(points), MatchOptions.max_fine_points, replace=False)]
-    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
-    probes, _, radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
-    spacing = float(np.median(radius)) / 2 * np.sqrt(len(medium) / count) if len(probes) else 0.0
-    return max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
-
-
 def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, gate: float,
                 options: CalibrationOptions, match_options: dict) -> np.ndarray:
     """U refined on resampled region points from a nudged start, the way a match refines a given
-    start (coarse to fine on a medium subset from the coarse voxel's ``gate``, finished on all the
-    points, then refined again from a wider gate, match._widened) without the verdict around it: a refit needs the pose
+    pose (coarse to fine on a medium subset from ``gate``, then match.refine_given: finished on all
+    the points, refined again from a wider gate) without the verdict around it: a refit needs the pose
     alone.  The paper's methods refit through their match."""
     if options.method != "robust":
         return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
     rng = np.random.default_rng(options.seed)
     medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
     state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
-    best = _polish(state, points, surface, options.tolerance_mm)
-    wide = _widened(best, medium, surface)
-    if _moved(wide.T, best.T, points.mean(axis=0), best.gate):
-        best = _polish(wide, points, surface, options.tolerance_mm)
-    return frames.invert(best.T)
+    return frames.invert(refine_given(state, medium, points, surface, options.tolerance_mm).T)
 
 
 def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> np.ndarray:

@@ -232,7 +232,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
         return (judge, *judge.rank(best, rivals, polish, widen,
                                    lambda state: _through_the_wall(state, medium, surface, gate),
-                                   lambda state: _turns_refined_like(state, medium, surface, gate, polish, widen),
+                                   lambda state: _turns_refined_like(state, medium, fine, surface, gate,
+                                                                     options.tolerance_mm),
                                    lambda state, noise: _slid_home(state, medium, surface, noise, polish)))
 
     with timer("verdict"):
@@ -395,6 +396,16 @@ def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
     return best
 
 
+def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
+    """A pose refined on the ``medium`` points (a RefineState, scan -> model), finished as a match
+    finishes its best: polished on all the ``fine`` points, refined again from a wider gate
+    (_widened: a fit can stop an edge's width off) and polished again when that moved it.  A turn
+    of the best (_turns_refined_like) and a bootstrap refit (calibration) are finished this way."""
+    best = _polish(state, fine, surface, tolerance)
+    wide = _widened(best, medium, surface)
+    return _polish(wide, fine, surface, tolerance) if _moved(wide.T, best.T, medium.mean(axis=0), best.gate) else best
+
+
 def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
     """The best pose turned by the model's near-symmetric turns (surface.flips: half turns about its
     principal axes, quarter turns of a near-square, each refined into the model's best self-map) and
@@ -419,9 +430,10 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
             for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
 
 
-def _turns_refined_like(best, medium: np.ndarray, surface: SurfaceModel, gate: float, polish, widen) -> list:
+def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
+                        tolerance: float) -> list:
     """The best pose's near-symmetric turns, each refined to convergence exactly as the best was
-    (``polish`` on all the fine points, then ``widen``, polished again if that moved it): the
+    (refine_given: polished on all the fine points, widened, polished again if that moved it): the
     model's flips (surface.flips) and the exact half turns about its principal axes through its
     centroid, those that still fit at the search's gate, distinct from the best and each other.
 
@@ -444,11 +456,7 @@ def _turns_refined_like(best, medium: np.ndarray, surface: SurfaceModel, gate: f
     poses = [best] + states
     keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), medium.mean(axis=0), 2.0,
                                   2 * best.gate)
-    refined = []
-    for state in (polish(poses[i]) for i in keep if i):
-        wide = widen(state)
-        refined.append(polish(wide) if _moved(wide.T, state.T, medium.mean(axis=0), state.gate) else state)
-    return refined
+    return [refine_given(poses[i], medium, fine, surface, tolerance) for i in keep if i]
 
 
 def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:

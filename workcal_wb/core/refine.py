@@ -74,13 +74,11 @@ def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, 
     tol_shift = tolerance * model.diagonal
     for it in range(max_iterations):
         moved = points @ state.T[:3, :3].T + state.T[:3, 3]
-        _, idx, found = model.nearest_cell(moved, gate)
-        if found.sum() < 6:
+        found, r, normals = model.tangent_planes(moved, gate)
+        if len(r) < 6:
             break
-        moved, idx = moved[found], idx[found]
-        r = model.plane_residuals(moved, idx)
         state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r)))
-        step = gauss_newton_step(moved, model.normals[idx], r, geman_mcclure(r, scale))
+        step = gauss_newton_step(moved[found], normals, r, geman_mcclure(r, scale))
         state.T = step @ state.T
         state.iterations = it + 1
         if is_small(step, tolerance, tol_shift):

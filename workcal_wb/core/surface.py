@@ -12,7 +12,6 @@ computes is plain numpy arrays and numbers, so a cache of prepared models can st
 from __future__ import annotations
 
 import threading
-import weakref
 from functools import cached_property
 
 import numpy as np
@@ -98,8 +97,9 @@ class NearestGrid:
         self._used = 2
         self.complete = complete  # every cell filled (precompute)
         self.filled = 0  # cells filled by lookups and precompute since the grid was made or loaded
-        # One model may serve two threads at once in FreeCAD (a task panel's worker and a recompute):
-        # storing a brick moves rows and may reallocate ``_rows``, so reads and writes take turns.
+        # One model may serve two threads at once (in FreeCAD a task panel's worker and a recompute;
+        # calibration's bootstrap refits): storing a brick moves rows and may reallocate ``_rows``, so
+        # reads and writes take turns until the grid is complete.
         self._lock = threading.RLock()
 
     def __getstate__(self) -> dict:
@@ -168,15 +168,21 @@ class NearestGrid:
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Sample index per point, -1 where no sample lies within the bound of its cell."""
+        if self.complete:  # every cell filled (precompute): nothing is stored any more, so reads need no turn
+            return self._looked_up(points)
         with self._lock:
-            keys, inside = self._cells(points)
-            keys = np.where(inside, keys, 0)
-            stored = self.stored(keys)
-            unknown = (stored == _UNKNOWN) & inside
-            if unknown.any():
+            return self._looked_up(points)
+
+    def _looked_up(self, points: np.ndarray) -> np.ndarray:
+        keys, inside = self._cells(points)
+        keys = np.where(inside, keys, 0)
+        stored = self.stored(keys)
+        unknown = (stored == _UNKNOWN) & inside
+        if unknown.any():
+            with self._lock:
                 self._fill(keys[unknown])
                 stored = self.stored(keys)
-            return np.where(inside & (stored > 0), stored - 1, -1)
+        return np.where(inside & (stored > 0), stored - 1, -1)
 
     def known(self) -> int:
         """How many cells are stored filled."""
@@ -237,6 +243,41 @@ class NearestGrid:
         return grid
 
 
+class _SampleTree:
+    """The samples' KD-tree, built on first call, shared by a model and its grids.  It holds the
+    samples, not the model: a bound method would tie the model and its grids in a reference cycle
+    (a model let go would keep its memory until the garbage collector's next full pass), and a weak
+    reference to the model would leave a grid that outlives it (a copied model's, one kept alone)
+    without its samples."""
+
+    def __init__(self, points: np.ndarray):
+        self.points, self._built = points, None
+
+    def __call__(self) -> cKDTree:
+        if self._built is None:
+            self._built = cKDTree(self.points)
+        return self._built
+
+    def __getstate__(self) -> dict:
+        return {"points": self.points, "_built": None}  # a copy builds its own tree when it needs one
+
+
+def _without_collapsed_faces(model: Cloud) -> Cloud:
+    """The mesh without its faces that have two corners at one point as the BVH holds them (float32
+    about the vertices' mean, see SurfaceModel._bvh), with a warning: such a face covers nothing, and
+    open3d's distance query aborts the whole process on one (an Eigen assertion)."""
+    if not model.is_mesh:
+        return model
+    held = (model.points - model.points.mean(axis=0)).astype(np.float32)
+    a, b, c = (held[model.triangles[:, i]] for i in range(3))
+    collapsed = (a == b).all(axis=1) | (b == c).all(axis=1) | (a == c).all(axis=1)
+    if not collapsed.any():
+        return model
+    warning = f"{model.name}: ignored {int(collapsed.sum())} faces with two corners at one point"
+    return Cloud(model.points, model.normals, model.triangles[~collapsed], model.name, [*model.warnings, warning],
+                 model.sensors, model.sensor_of)
+
+
 class SurfaceModel:
     """Samples (mm) with unit outward normals and a KD-tree, the model's symmetries; coarse features
     cached per voxel size.
@@ -246,6 +287,7 @@ class SurfaceModel:
     """
 
     def __init__(self, model: Cloud, seed: int = 0, symmetry_tolerance_mm: float | None = None):
+        model = _without_collapsed_faces(model)
         if len(model) < 3 or shape_kind(model.points) != "solid":
             kind = "too small" if len(model) < 3 else shape_kind(model.points)
             raise InputError(f"{model.name}: the model is {kind}; a pose cannot be fitted to it")
@@ -272,6 +314,7 @@ class SurfaceModel:
                 normals = pointops.orient_outward(points, pointops.estimate_normals(points, 3 * spacing))
             weights = np.ones(len(points))
         self.points, self.normals, self.spacing = points, normals, spacing
+        self._tree = _SampleTree(points)
         self.warnings = list(model.warnings)
         self.vertices = model.points
         self.triangles = model.triangles
@@ -293,10 +336,10 @@ class SurfaceModel:
         self._grids: dict[int, NearestGrid] = {}  # level -> the nearest-sample grid for its gates
         self._custom_grids: dict[tuple, NearestGrid] = {}  # (cell, bound) -> a grid of its own
 
-    @cached_property
+    @property
     def tree(self) -> cKDTree:
         """KD-tree of the samples (built when first needed: a model from the cache may never need it)."""
-        return cKDTree(self.points)
+        return self._tree()
 
     def symmetries(self) -> list[str]:
         """The model's symmetries in words (model frame), e.g. "turning the part 90 degrees about its
@@ -326,13 +369,27 @@ class SurfaceModel:
     def nearest_cell(self, points: np.ndarray, gate: float):
         """Like ``nearest``, through the cell grid of the gate's level: each point gets its cell's
         nearest sample."""
+        d, idx, found, _ = self._cell_offsets(points, gate)
+        return d, idx, found
+
+    def tangent_planes(self, points: np.ndarray, gate: float):
+        """(found, residuals, normals): which points ``nearest_cell`` finds, and for those, their
+        ``plane_residuals`` and their samples' normals, each sample array gathered once (a
+        refinement step asks for all three)."""
+        _, idx, found, offset = self._cell_offsets(points, gate)
+        normals = self.normals[idx[found]]
+        return found, np.einsum("ij,ij->i", offset[found], normals), normals
+
+    def _cell_offsets(self, points: np.ndarray, gate: float):
+        """(distance, sample index, found, offset from the sample) through the gate's cell grid."""
         level = max(0, int(np.ceil(np.log2(gate / (GATE_CELLS * self.spacing)))))
         idx = self.grid_level(level).lookup(points)
         found = idx >= 0
         idx = np.where(found, idx, 0)
-        d = pointops.lengths(points - self.points[idx])
+        offset = points - self.points[idx]
+        d = pointops.lengths(offset)
         found &= d <= gate
-        return d, idx, found
+        return d, idx, found, offset
 
     def grid_level(self, level: int) -> NearestGrid:
         """The cell grid for gates up to GATE_CELLS x 2^level sample spacings (cached)."""
@@ -382,13 +439,6 @@ class SurfaceModel:
             self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
         return self._features[key]
 
-    @property
-    def _tree(self):
-        """A function returning the samples' KD-tree, for the grids to keep: it holds the model weakly (a
-        bound method would tie the model and its grids in a reference cycle, so a model let go would
-        keep its memory until the garbage collector's next full pass)."""
-        model = weakref.ref(self)
-        return lambda: model().tree
 
     # -- as plain data, for the model cache (model_cache.py) ---------------------------------------
 
@@ -428,6 +478,7 @@ class SurfaceModel:
         n = len(arrays["points"])
         take = _Arrays(arrays)
         self.points, self.normals = take("points", "f8", (n, 3)), take("normals", "f8", (n, 3))
+        self._tree = _SampleTree(self.points)
         self.view_order = take("view_order", "i8", (n,))
         self.vertices = take("vertices", "f8", (None, 3))
         self.triangles = self.face_normals = None
