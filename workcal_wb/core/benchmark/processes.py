@@ -62,7 +62,8 @@ if pid == 0:
     os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
     os.execv(sys.argv[1], sys.argv[1:])
 _, status, usage = os.wait4(pid, 0)
-print(time.perf_counter() - started, usage.ru_maxrss, os.waitstatus_to_exitcode(status), usage.ru_utime + usage.ru_stime)
+print(time.perf_counter() - started, usage.ru_maxrss, os.waitstatus_to_exitcode(status),
+      usage.ru_utime + usage.ru_stime)
 """
 
 
@@ -132,7 +133,8 @@ def match_runs(folder: Path, bunny: Path, seed: int, quick: bool, log) -> tuple[
                 elapsed, peak, cpu = timed(argv)
                 matrix = json.loads(result.read_text())["matrix"]
                 rotation, displacement = pose_errors(None if matrix is None else np.array(matrix), truth, points)
-                run = Run("match", method, name, elapsed, peak, rotation < SUCCESS_DEG and displacement < SUCCESS_MM, cpu)
+                success = rotation < SUCCESS_DEG and displacement < SUCCESS_MM
+                run = Run("match", method, name, elapsed, peak, success, cpu)
                 kept = best.get((method, name))
                 if kept is None:
                     best[(method, name)] = run
@@ -230,8 +232,8 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
              "the models loaded from the warm cache before the clock starts, one untimed first run (it fills the "
              "nearest-sample grids the models build on first use), then each timed run against the same models. "
              f"Times: medians over the cases of each case's fastest of {ROUNDS} alternating rounds; CPU time: the "
-             "process's user and system time, all its threads, in the same round as its wall time (the wall time "
-             "waits for the cores other jobs hold; the CPU time much less so); peak memory: "
+             "process's user and system time, all its threads, taken like the wall time (each case's least over "
+             "its rounds; the wall time waits for the cores other jobs hold, the CPU time much less so); peak memory: "
              "each process's own maximum resident set (Python and libraries included). KISS-Matcher is given the "
              "stock pipeline's voxel (model diagonal / 50) in mm, noise bounds not clamped, then small_gicp "
              "point-to-plane ICP (clouds thinned at voxel / 4, correspondences within 0.4 voxel as in stock's "
