@@ -126,23 +126,24 @@ def test_whole_process_peak_memory_is_the_processs_own(tmp_path):
     from workcal_wb.core.benchmark.processes import PYTHON, timed
 
     ballast = np.ones(40_000_000)  # 320 MB in the measuring process
-    _, small = timed([PYTHON, "-c", "import numpy"])
-    _, large = timed([PYTHON, "-c", "import numpy; a = numpy.ones(25_000_000)"])  # 200 MB more
+    _, small, _ = timed([PYTHON, "-c", "import numpy"])
+    _, large, cpu = timed([PYTHON, "-c", "import numpy; a = numpy.ones(25_000_000)"])  # 200 MB more
     assert small < 150 < 190 < large < 320 and ballast[-1] == 1
+    assert 0 < cpu  # the child's own CPU time, filling 200 MB
 
 
 def test_whole_process_table_flags_missed_targets():
     from workcal_wb.core.benchmark.processes import COLD, IN_PROCESS, KISS, STOCK as PEER, WARM, Run, table
 
     def runs(command, method, time_s, peak, success=True, n=4):
-        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0) for i in range(n)]
+        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0, time_s / 2) for i in range(n)]
 
     good = (runs("match", COLD, 0.8, 300) + runs("match", WARM, 0.2, 300) + runs("match", PEER, 1.0, 400)
             + runs("match", KISS, 0.8, 200) + runs("calibrate", WARM, 0.9, 350)
             + runs("calibrate", IN_PROCESS, 0.25, 350))
     text, missed = table(good, [PEER, KISS], None)
     assert not missed and "All met." in text
-    assert "| match | WorkCal warm | 4 | 100% | 0.200 | 0.25 | 300 | 300 |" in text  # vs the faster peer (0.8 s)
+    assert "| match | WorkCal warm | 4 | 100% | 0.200 | 0.25 | 0.100 | 300 | 300 |" in text  # vs the faster peer (0.8 s)
     bad = (runs("match", WARM, 0.3, 500, success=False) + runs("match", PEER, 1.0, 400)
            + runs("match", KISS, 0.6, 200) + runs("calibrate", WARM, 1.2, 350)
            + runs("calibrate", IN_PROCESS, 0.4, 350))

@@ -78,8 +78,8 @@ def measure(seed: int, quick: bool, log) -> list:
             for run in (COLD, WARM):
                 log(f"large scans: match {name} {run}, round {r + 1}")
                 result.unlink(missing_ok=True)
-                elapsed, peak = timed([PYTHON, "-m", "workcal_wb", "match", str(path), str(model), "--units", "mm",
-                                       "--json", str(result), "--cache", str(cache), "--seed", str(seed)])
+                elapsed, peak, _ = timed([PYTHON, "-m", "workcal_wb", "match", str(path), str(model), "--units", "mm",
+                                          "--json", str(result), "--cache", str(cache), "--seed", str(seed)])
                 outcome = json.loads(result.read_text())
                 matrix = outcome["matrix"]
                 rotation, displacement = pose_errors(None if matrix is None else np.array(matrix), truth, model_points)

@@ -49,9 +49,10 @@ class Run:
     time_s: float
     peak_mb: float
     success: bool
+    cpu_s: float = float("nan")  # user + system time of the process, all its threads
 
 
-# Runs one command and prints its wall time, peak resident memory (kB) and exit status.  A small
+# Runs one command and prints its wall time, peak resident memory (kB), exit status and CPU time.  A small
 # process of its own forks it: a child's peak memory counts the memory of whatever forked it (Linux
 # keeps the forking process's high-water mark across exec), so the benchmark's own must not.
 LAUNCHER = """import os, sys, time
@@ -61,18 +62,19 @@ if pid == 0:
     os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
     os.execv(sys.argv[1], sys.argv[1:])
 _, status, usage = os.wait4(pid, 0)
-print(time.perf_counter() - started, usage.ru_maxrss, os.waitstatus_to_exitcode(status))
+print(time.perf_counter() - started, usage.ru_maxrss, os.waitstatus_to_exitcode(status),
+      usage.ru_utime + usage.ru_stime)
 """
 
 
-def timed(argv: list) -> tuple[float, float]:
-    """Wall time (s) and peak resident memory (MB) of one process; RuntimeError when it fails."""
+def timed(argv: list) -> tuple[float, float, float]:
+    """Wall time (s), peak resident memory (MB) and CPU time (s) of one process; RuntimeError when it fails."""
     done = subprocess.run([PYTHON, "-I", "-S", "-c", LAUNCHER, *map(str, argv)], cwd=ROOT, capture_output=True,
                           text=True)
-    elapsed, peak_kb, code = done.stdout.split()
+    elapsed, peak_kb, code, cpu = done.stdout.split()
     if int(code) not in (0, 1):  # 1: a calibration that ran and is not "ok"
         raise RuntimeError(f"{' '.join(map(str, argv))} exited with {code}: {done.stderr[-400:]}")
-    return float(elapsed), int(peak_kb) / 1024
+    return float(elapsed), int(peak_kb) / 1024, float(cpu)
 
 
 def compile_bytecode() -> None:
@@ -128,15 +130,17 @@ def match_runs(folder: Path, bunny: Path, seed: int, quick: bool, log) -> tuple[
                                 str(model), str(result)] for peer in peers})
             for method, argv in runs.items():
                 result.unlink(missing_ok=True)
-                elapsed, peak = timed(argv)
+                elapsed, peak, cpu = timed(argv)
                 matrix = json.loads(result.read_text())["matrix"]
                 rotation, displacement = pose_errors(None if matrix is None else np.array(matrix), truth, points)
-                run = Run("match", method, name, elapsed, peak, rotation < SUCCESS_DEG and displacement < SUCCESS_MM)
+                success = rotation < SUCCESS_DEG and displacement < SUCCESS_MM
+                run = Run("match", method, name, elapsed, peak, success, cpu)
                 kept = best.get((method, name))
                 if kept is None:
                     best[(method, name)] = run
-                else:  # the first round's outcome, the fastest round's time, the largest memory
+                else:  # the first round's outcome, the fastest round's times, the largest memory
                     kept.time_s, kept.peak_mb = min(kept.time_s, elapsed), max(kept.peak_mb, peak)
+                    kept.cpu_s = min(kept.cpu_s, cpu)
     return list(best.values()), peers
 
 
@@ -157,9 +161,9 @@ def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
         shutil.rmtree(cache, ignore_errors=True)
         for method in (COLD, WARM):
             out = folder / f"calibrate-{r}-{method.split()[1]}"
-            elapsed, peak = timed(argv + ["--out", str(out)])
+            elapsed, peak, cpu = timed(argv + ["--out", str(out)])
             ok = json.loads((out / "result.json").read_text())["status"] == "ok"
-            runs.append(Run("calibrate", method, "demo scene", elapsed, peak, ok))
+            runs.append(Run("calibrate", method, "demo scene", elapsed, peak, ok, cpu))
     # In a fresh process of its own (its memory its own), as the FreeCAD workbench calls it.
     return runs + _in_child(_in_process, scene, cache, seed, 1 if quick else 3)
 
@@ -181,12 +185,12 @@ def _in_process(scene: Path, cache: Path, seed: int, repeats: int, queue) -> Non
     workpiece, reference = (models.model_file(scene / name, seed=seed) for name in ("workpiece.ply", "reference.ply"))
     runs = []
     for repeat in range(repeats + 1):
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         result = calibrate(scan, workpiece, reference, toolpath_points=toolpath, options=CalibrationOptions(seed=seed))
-        elapsed = time.perf_counter() - started
+        elapsed, cpu = time.perf_counter() - started, time.process_time() - cpu
         if repeat:
             runs.append(Run("calibrate", IN_PROCESS, "demo scene", elapsed,
-                            resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, result.status == "ok"))
+                            resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, result.status == "ok", cpu))
     queue.put(runs)
 
 
@@ -202,6 +206,7 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
         members = [r for r in runs if (r.command, r.method) == (command, method)]
         stats[(command, method)] = {"n": len(members), "success": sum(r.success for r in members) / len(members),
                                     "time": median([r.time_s for r in members]),
+                                    "cpu": median([r.cpu_s for r in members]),
                                     "peak": median([r.peak_mb for r in members]),
                                     "max_peak": max(r.peak_mb for r in members)}
     peer_times = {p: stats[("match", p)]["time"] for p in peers if ("match", p) in stats}
@@ -226,7 +231,9 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
              "`calibrate()` alone as the FreeCAD workbench runs it, models prepared once and kept: the scan read and "
              "the models loaded from the warm cache before the clock starts, one untimed first run (it fills the "
              "nearest-sample grids the models build on first use), then each timed run against the same models. "
-             f"Times: medians over the cases of each case's fastest of {ROUNDS} alternating rounds; peak memory: "
+             f"Times: medians over the cases of each case's fastest of {ROUNDS} alternating rounds; CPU time: the "
+             "process's user and system time, all its threads, taken like the wall time (each case's least over "
+             "its rounds; the wall time waits for the cores other jobs hold, the CPU time much less so); peak memory: "
              "each process's own maximum resident set (Python and libraries included). KISS-Matcher is given the "
              "stock pipeline's voxel (model diagonal / 50) in mm, noise bounds not clamped, then small_gicp "
              "point-to-plane ICP (clouds thinned at voxel / 4, correspondences within 0.4 voxel as in stock's "
@@ -237,12 +244,12 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
                   "absolute times.", ""]
     if note:
         lines += [f"Note: {note}", ""]
-    lines += ["| command | method | cases | success | median time (s) | time vs faster peer | median peak memory (MB) "
-              "| max peak memory (MB) |", "|---|---|---|---|---|---|---|---|"]
+    lines += ["| command | method | cases | success | median time (s) | time vs faster peer | median CPU time (s) "
+              "| median peak memory (MB) | max peak memory (MB) |", "|---|---|---|---|---|---|---|---|---|"]
     for (command, method), s in stats.items():
         ratio = (f"{s['time'] / peer_times[faster]:.2f}" if command == "match" and faster else "-")
         lines.append(f"| {command} | {method} | {s['n']} | {s['success']:.0%} | {s['time']:.3f} | {ratio} | "
-                     f"{s['peak']:.0f} | {s['max_peak']:.0f} |")
+                     f"{s['cpu']:.3f} | {s['peak']:.0f} | {s['max_peak']:.0f} |")
     missed = []
     warm = stats.get(("match", WARM))
     if warm and faster:
