@@ -341,7 +341,7 @@ def mesh_cloud():
     points = rng.uniform(-100, 100, (50, 3))
     normals = rng.normal(size=(50, 3))
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    return Cloud(points, normals, rng.integers(0, 50, (80, 3)), "part")
+    return Cloud(points, normals, np.array([rng.choice(50, 3, replace=False) for _ in range(80)]), "part")
 
 
 @pytest.mark.parametrize("binary", [True, False])

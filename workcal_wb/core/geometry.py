@@ -78,7 +78,8 @@ class Cloud:
 
 
 def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
-    """Drop non-finite and duplicate points with a warning; refuse a cloud that is left too small.
+    """Drop non-finite and duplicate points, and a mesh's faces that cover nothing, with a warning;
+    refuse a cloud that is left too small.
 
     Scanners write NaN for pixels without a return and repeat points at seams; both are normal
     and only worth a warning, but a cloud with (almost) nothing left is an error that names it.
@@ -101,7 +102,10 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         if bad.any():
             raise InputError(f"{cloud.name}: faces refer to vertices that do not exist "
                              f"(indices outside 0..{len(pts) - 1})")
-        return _verified(Cloud(pts, cloud.normals, cloud.triangles, cloud.name, warnings, cloud.sensors,
+        collapsed = _collapsed_faces(pts, cloud.triangles)
+        if collapsed.any():
+            warnings.append(f"{cloud.name}: ignored {int(collapsed.sum())} faces with two corners at one point")
+        return _verified(Cloud(pts, cloud.normals, cloud.triangles[~collapsed], cloud.name, warnings, cloud.sensors,
                                cloud.sensor_of))
     keep = np.flatnonzero(finite)
     if len(keep) < len(pts):
@@ -121,6 +125,15 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
     normals = None if cloud.normals is None else cloud.normals[keep]
     return _verified(Cloud(pts[keep], normals, None, cloud.name, warnings, cloud.sensors,
                            None if cloud.sensor_of is None else cloud.sensor_of[keep]))
+
+
+def _collapsed_faces(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Mask of the faces with two corners at one point as a distance query holds them (float32 about
+    the vertices' mean, SurfaceModel._bvh): such a face covers nothing, and open3d's distance query
+    aborts the whole process on one (an Eigen assertion)."""
+    held = (points - points.mean(axis=0)).astype(np.float32)
+    a, b, c = (held[triangles[:, i]] for i in range(3))
+    return (a == b).all(axis=1) | (b == c).all(axis=1) | (a == c).all(axis=1)
 
 
 def _within(values: np.ndarray, limit: float) -> np.ndarray:

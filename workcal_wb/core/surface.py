@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from . import pointops
 from .errors import InputError
-from .geometry import Cloud, shape_kind
+from .geometry import Cloud, checked, shape_kind
 
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
 # the query point (so residuals are exact), coarse enough to keep the tree ~100k samples.
@@ -262,22 +262,6 @@ class _SampleTree:
         return {"points": self.points, "_built": None}  # a copy builds its own tree when it needs one
 
 
-def _without_collapsed_faces(model: Cloud) -> Cloud:
-    """The mesh without its faces that have two corners at one point as the BVH holds them (float32
-    about the vertices' mean, see SurfaceModel._bvh), with a warning: such a face covers nothing, and
-    open3d's distance query aborts the whole process on one (an Eigen assertion)."""
-    if not model.is_mesh:
-        return model
-    held = (model.points - model.points.mean(axis=0)).astype(np.float32)
-    a, b, c = (held[model.triangles[:, i]] for i in range(3))
-    collapsed = (a == b).all(axis=1) | (b == c).all(axis=1) | (a == c).all(axis=1)
-    if not collapsed.any():
-        return model
-    warning = f"{model.name}: ignored {int(collapsed.sum())} faces with two corners at one point"
-    return Cloud(model.points, model.normals, model.triangles[~collapsed], model.name, [*model.warnings, warning],
-                 model.sensors, model.sensor_of)
-
-
 class SurfaceModel:
     """Samples (mm) with unit outward normals and a KD-tree, the model's symmetries; coarse features
     cached per voxel size.
@@ -287,7 +271,7 @@ class SurfaceModel:
     """
 
     def __init__(self, model: Cloud, seed: int = 0, symmetry_tolerance_mm: float | None = None):
-        model = _without_collapsed_faces(model)
+        model = checked(model, 3)  # the readers' promises, also for a cloud made in code
         if len(model) < 3 or shape_kind(model.points) != "solid":
             kind = "too small" if len(model) < 3 else shape_kind(model.points)
             raise InputError(f"{model.name}: the model is {kind}; a pose cannot be fitted to it")
