@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from workcal_wb.core import frames
+from workcal_wb.core import calibration
 from workcal_wb.core import match as match_module
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import Cancelled, InputError
@@ -16,6 +17,7 @@ from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.scanner import Scanner
 from workcal_wb.core.simulate.scene import build_scene
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath_points
+from workcal_wb.core.surface import SurfaceModel
 
 # An ~90k-point scene scan (the paper's scanner zoomed out a little): quick, and the size of the speed target.
 IMAGE = (368, 276)
@@ -92,12 +94,28 @@ def test_a_paper_method_is_the_method_of_both_final_matches(plain):
     assert (result.workpiece.method, result.reference.method) == ("icp", "icp")
 
 
-def test_user_regions_give_the_same_W(car):
-    scene, scan, _, automatic = car
+@pytest.fixture(scope="module")
+def user_regions(car):
+    scene, scan, _, _ = car
     regions = {role: np.flatnonzero(scan.mask(role)) for role in ("workpiece", "reference")}
-    result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
+    models = SurfaceModel(scene.workpiece_model()), SurfaceModel(scene.reference_model())
+    return models, regions, calibrate(scan.cloud(), *models, regions=regions)
+
+
+def test_user_regions_give_the_same_W(car, user_regions):
+    scene, _, _, automatic = car
+    result = user_regions[2]
     assert result.status == "ok" and result.regions["source"] == "user"
     assert _errors(result.W, scene.W)[0] < 0.02 and _errors(result.W, automatic.W)[1] < 0.05
+
+
+def test_the_bound_is_the_same_on_one_refit_thread_as_on_two(car, user_regions, monkeypatch):
+    """The draws and nudges are made in order, whatever thread refits them."""
+    _, scan, _, _ = car
+    models, regions, two_threads = user_regions
+    monkeypatch.setattr(calibration, "REFIT_THREADS", 1)
+    one_thread = calibrate(scan.cloud(), *models, regions=regions)
+    assert calibration.REFIT_THREADS == 1 and two_threads.uncertainty == one_thread.uncertainty
 
 
 def test_result_round_trips_through_json(car, tmp_path):

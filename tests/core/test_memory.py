@@ -27,8 +27,9 @@ def test_a_prepared_model_let_go_is_freed_without_the_garbage_collector():
 
 
 def test_a_copied_model_keeps_working_after_the_original_is_let_go():
-    """A grid holds the model weakly (no cycle); a copy of the model (FreeCAD copies objects) must not
-    be left with grids pointing at the original: once that is gone, filling a cell needs the samples."""
+    """A grid holds the samples' KD-tree holder, not the model (no cycle); a copy of the model (FreeCAD
+    copies objects) must not be left with grids that need the original: once that is gone, filling a
+    cell still needs the samples (grids holding the model weakly failed here)."""
     import copy
 
     rng = np.random.default_rng(1)

@@ -130,3 +130,19 @@ def test_unknown_paper_method_is_refused(car):
     points, surface, U = car
     with pytest.raises(ValueError, match="paper method"):
         refine_paper("chamfer", points, surface, frames.invert(U))
+
+
+def test_a_complete_grid_answers_as_one_filled_on_use(car):
+    """precompute fills every cell within the bound, also those diagonally off the surface past a
+    corner or an edge (its dilation took six neighbours a step and missed them: they said "none"
+    where a grid filled on use gives the sample)."""
+    _, surface, _ = car
+    cell = 2 * surface.spacing
+    bound = 5 * cell
+    complete, on_use = (NearestGrid.around(surface.points, lambda: surface.tree, cell, bound) for _ in range(2))
+    complete.precompute()
+    rng = np.random.default_rng(3)
+    offsets = rng.normal(size=(20000, 3))
+    offsets *= (rng.random(20000) * bound / np.linalg.norm(offsets, axis=1))[:, None]
+    near = surface.points[rng.choice(len(surface.points), 20000)] + offsets
+    assert np.array_equal(complete.lookup(near), on_use.lookup(near))

@@ -89,7 +89,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     trusted comes back with status "failed" or "ambiguous" and the reasons.
     """
     # The whole of it on options.blas_threads, not only the matches: the bootstrap refits' small
-    # products on OpenBLAS's own threads took ten times as long on a busy machine (its threads spin).
+    # products on OpenBLAS's own threads took about ten times as long on a busy machine (their threads spin).
     with pointops.blas_threads(options.blas_threads):
         return _calibrate(scans, workpiece, reference, regions, toolpath_points, options, progress)
 
@@ -279,9 +279,9 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     the refits stay spread, and so does W (a block seen on two faces is centred between its edges
     in every refit, see edges.py, so there the spread is how well its edges place it).  The bound is
     UNCERTAINTY_FACTOR times the RMS displacement over the refits.  The studies check it against the
-    true error (docs/studies.md).  The refits run on REFIT_THREADS threads (numpy lets go of the
-    interpreter in their array work); the draws and nudges are made first, in order, so the bound does
-    not depend on the threads.
+    true error (docs/studies.md).  The refits run on REFIT_THREADS threads when BLAS is held to one
+    (numpy lets go of the interpreter in their array work); the draws and nudges are made in order, so
+    the bound does not depend on the threads.
     """
     rng = np.random.default_rng(options.seed + 1)
     roles = ("workpiece", "reference")
@@ -295,11 +295,16 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
     gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
-    jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
-             m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
-            for _ in range(options.resamples) for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
-    with ThreadPoolExecutor(max_workers=REFIT_THREADS) as pool:
-        refits = list(pool.map(lambda job: _refit_pose(*job), jobs))
+    # Two threads only with BLAS held to one (FreeCAD's workers leave BLAS alone: its own threads would spin).
+    threads = REFIT_THREADS if options.blas_threads == 1 else 1
+    refits = []
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        for _ in range(0, options.resamples, threads):  # drawn a few at a time: the draws of 100 refits are 100 MB
+            jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
+                     m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
+                    for _ in range(min(threads, options.resamples - len(refits) // 2))
+                    for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
+            refits += pool.map(lambda job: _refit_pose(*job), jobs)
     rotations = []
     for U_r, V_r in zip(refits[0::2], refits[1::2]):
         W_r = frames.invert(V_r) @ U_r

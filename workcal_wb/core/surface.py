@@ -199,7 +199,8 @@ class NearestGrid:
             occupied[c[:, 0], c[:, 1], c[:, 2]] = True
             from scipy.ndimage import binary_dilation
 
-            near = binary_dilation(occupied, iterations=int(np.ceil(self.bound / self.cell)) + 1)
+            near = binary_dilation(occupied, structure=np.ones((3, 3, 3), bool),  # diagonal steps too
+                                   iterations=int(np.ceil(self.bound / self.cell)) + 1)
             del occupied
             # A slab of bricks at a time: the near cells' indices of a whole grid are tens of MB.
             step = BRICK * max(1, FILL_CHUNK // (BRICK * int(self.dims[1]) * int(self.dims[2])))

@@ -134,14 +134,17 @@ def match_runs(folder: Path, bunny: Path, seed: int, quick: bool, log) -> tuple[
                 matrix = json.loads(result.read_text())["matrix"]
                 rotation, displacement = pose_errors(None if matrix is None else np.array(matrix), truth, points)
                 success = rotation < SUCCESS_DEG and displacement < SUCCESS_MM
-                run = Run("match", method, name, elapsed, peak, success, cpu)
-                kept = best.get((method, name))
-                if kept is None:
-                    best[(method, name)] = run
-                else:  # the first round's outcome, the fastest round's times, the largest memory
-                    kept.time_s, kept.peak_mb = min(kept.time_s, elapsed), max(kept.peak_mb, peak)
-                    kept.cpu_s = min(kept.cpu_s, cpu)
+                _keep_fastest(best, Run("match", method, name, elapsed, peak, success, cpu))
     return list(best.values()), peers
+
+
+def _keep_fastest(best: dict, run: Run) -> None:
+    """Fold ``run`` into ``best``, one entry per method and case: the first round's outcome, the
+    fastest round's wall and CPU times, the largest memory."""
+    kept = best.setdefault((run.method, run.case), run)
+    if kept is not run:
+        kept.time_s, kept.cpu_s = min(kept.time_s, run.time_s), min(kept.cpu_s, run.cpu_s)
+        kept.peak_mb = max(kept.peak_mb, run.peak_mb)
 
 
 def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
@@ -155,7 +158,7 @@ def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
     argv = [PYTHON, "-m", "workcal_wb", "calibrate", "--scan", str(scene / "scan.ply"), "--workpiece",
             str(scene / "workpiece.ply"), "--reference", str(scene / "reference.ply"), "--toolpath",
             str(scene / "toolpath.nc"), "--machine", "5axis-tcp", "--seed", str(seed), "--cache", str(cache)]
-    runs = []
+    best: dict = {}
     for r in range(1 if quick else ROUNDS):
         log(f"whole processes: calibrate the demo scene, round {r + 1}")
         shutil.rmtree(cache, ignore_errors=True)
@@ -163,13 +166,16 @@ def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
             out = folder / f"calibrate-{r}-{method.split()[1]}"
             elapsed, peak, cpu = timed(argv + ["--out", str(out)])
             ok = json.loads((out / "result.json").read_text())["status"] == "ok"
-            runs.append(Run("calibrate", method, "demo scene", elapsed, peak, ok, cpu))
-    # In a fresh process of its own (its memory its own), as the FreeCAD workbench calls it.
-    return runs + _in_child(_in_process, scene, cache, seed, 1 if quick else 3)
+            _keep_fastest(best, Run("calibrate", method, "demo scene", elapsed, peak, ok, cpu))
+    # In a fresh process of its own (its memory its own).
+    for run in _in_child(_in_process, scene, cache, seed, 1 if quick else 3):
+        _keep_fastest(best, run)
+    return list(best.values())
 
 
 def _in_process(scene: Path, cache: Path, seed: int, repeats: int, queue) -> None:
-    """``calibrate()`` as the FreeCAD workbench calls it: the models loaded from the warm cache once and
+    """``calibrate()`` with the models kept as the FreeCAD workbench keeps them (headless options: BLAS on
+    one thread, where FreeCAD's worker thread leaves BLAS as it is): the models loaded from the warm cache once and
     kept, one untimed first run (it fills what the models build on first use, as a document's first
     calibration does), then ``repeats`` timed runs against the same kept models."""
     import resource
@@ -228,9 +234,11 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
              "the report (the workpiece region's exact distances to its mesh through open3d's BVH; two "
              "PNG views drawn with numpy; an SVG histogram; report.html and report.json) and, when the run grew "
              "them, the prepared models written back to the cache. In-process: "
-             "`calibrate()` alone as the FreeCAD workbench runs it, models prepared once and kept: the scan read and "
+             "`calibrate()` alone with the models prepared once and kept as the FreeCAD workbench keeps them "
+             "(headless options: BLAS on one thread; FreeCAD's worker leaves BLAS as it is): the scan read and "
              "the models loaded from the warm cache before the clock starts, one untimed first run (it fills the "
-             "nearest-sample grids the models build on first use), then each timed run against the same models. "
+             "nearest-sample grids the models build on first use), then 3 timed runs against the same models, "
+             "the fastest kept. "
              f"Times: medians over the cases of each case's fastest of {ROUNDS} alternating rounds; CPU time: the "
              "process's user and system time, all its threads, taken like the wall time (each case's least over "
              "its rounds; the wall time waits for the cores other jobs hold, the CPU time much less so); peak memory: "
