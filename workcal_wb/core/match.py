@@ -28,6 +28,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from statistics import NormalDist
 
 import numpy as np
 
@@ -114,6 +115,9 @@ EVIDENCE_SIGMAS = 3.0
 # residual scales off its surface, fully from FAR_OFF_SIGMAS (further off is no further evidence: an
 # outlier is an outlier).
 FAR_OFF_SIGMAS = 10.0
+# Up to this many points differing between two poses, the far-off test's chance is exact (all 2^n
+# sign patterns, their weights on a grid of 1/SIGN_FLIP_STEPS: sign_flip_z); beyond, its normal approximation.
+EXACT_SIGN_FLIPS, SIGN_FLIP_STEPS = 64, 256
 # ... and it only rules out a turn of the best when the best's residual scale is at most this many
 # times the noise (right poses measured 1-2x; a pose slid along a curved part, held there by a few
 # points, 4x).
@@ -792,17 +796,42 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
     (FAR_OFF_SIGMAS^2 - 3^2), 0, 1) for u = distance / sigma, so a point within EVIDENCE_SIGMAS of
     the surface counts nothing (within the noise, a pose's small misfit must not decide), one
     FAR_OFF_SIGMAS or more off counts fully, and no outlier counts more than that.  The per-point
-    differences d = w(rival) - w(best) are paired (one scan, both poses) and tested as a mean:
-    sum(d) / sqrt(sum((d - mean d)^2)).  Two poses that explain the scan alike (a symmetry, a view
-    that cannot tell) leave as many points off each way, so the statistic is about standard normal
-    (at most sqrt(n) for n points off one way only: 3 standard errors need at least 9 points all off
-    the rival).  Negative when the best leaves more far off."""
+    differences d = w(rival) - w(best) are paired (one scan, both poses): when the two poses explain
+    the scan alike (a symmetry, a view that cannot tell), each difference is as likely either way,
+    so their sum is tested against its sign-flip distribution (sign_flip_z): exactly when a few tens
+    of points differ (a flip leaves ten points off: the chance of all ten one way is 2^-10, 3.1
+    standard errors, however far off each lies), about normally when more do.  Negative when the
+    best leaves more far off."""
     def weight(distance):
         u2 = (distance / max(sigma, 1e-9)) ** 2
         return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
 
-    d = weight(rival) - weight(best)
-    return float(d.sum() / np.sqrt(max(float(np.sum((d - d.mean()) ** 2)), 1e-12)))
+    return sign_flip_z(weight(rival) - weight(best))
+
+
+def sign_flip_z(d: np.ndarray) -> float:
+    """The paired differences ``d`` (weights in [-1, 1], each as likely positive as negative when
+    nothing tells the poses apart) as a signed normal score: the standard normal quantile of the
+    chance that their sum comes out at least as far from zero on its side under random signs (a
+    one-sided p-value).  Exact, on a grid of 1/SIGN_FLIP_STEPS, for up to EXACT_SIGN_FLIPS nonzero
+    differences (the normal approximation of a sum of a few unequal terms is poor: ten points all
+    one way scored 2.8 to 3.2 by their sizes); beyond, the sum over its null standard deviation
+    sqrt(sum d^2).  0 when the differences cancel."""
+    steps = np.rint(np.asarray(d, float) * SIGN_FLIP_STEPS).astype(np.int64)
+    steps = steps[steps != 0]
+    total = int(steps.sum())
+    if total == 0:
+        return 0.0
+    if len(steps) > EXACT_SIGN_FLIPS:
+        return total / float(np.sqrt(np.sum(steps.astype(float) ** 2)))
+    chance = np.ones(1)  # chance[s] of the sum s - offset under random signs, built one difference at a time
+    for k in np.abs(steps):
+        grown = np.zeros(len(chance) + 2 * k)
+        grown[:len(chance)] += chance / 2
+        grown[2 * k:] += chance / 2
+        chance = grown
+    p = float(chance[len(chance) // 2 + abs(total):].sum())  # the distribution is symmetric about its middle
+    return float(np.copysign(-NormalDist().inv_cdf(p), total)) if p < 0.5 else 0.0
 
 
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
