@@ -151,7 +151,7 @@ def verdict_views():
 
 
 @pytest.mark.parametrize("name", ["notched plate #4", "curved tile #4", "rebated plate #1"])
-def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name):
+def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name, monkeypatch):
     """The half turn puts all but a few tens of the scan's points on the part, and the view's cells
     barely tell it from the right pose.  Never a wrong "ok" (on the same views simulated by ray casting,
     open3d 0.19, the search never proposed the notched plate's right pose and a flip came back "ok"),
@@ -161,7 +161,10 @@ def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name):
     The rebated plate's flip leaves only ten points off (its search's best was the flip): on the
     ray-cast views, 3.0 standard errors by the normal approximation, one hundredth short."""
     points, truth, surface = verdict_views[name]
+    asked, exact = [], surface.exact_distance  # each pose's exact distances are computed once
+    monkeypatch.setattr(surface, "exact_distance", lambda points: asked.append(hash(points.tobytes())) or exact(points))
     result = match(Cloud(points, name=name), surface)
+    assert len(asked) == len(set(asked))
     right = _right(surface, result.matrix, truth)
     assert result.status != "ok" or right, result.reasons
     assert result.status == "ok" and right, result.reasons
@@ -199,6 +202,25 @@ def test_few_points_all_off_one_pose_count_by_their_chance_not_their_sizes():
     alike = [far_off_test(np.where(rng.random(4000) < 0.003, 20 * sigma, best),
                           np.where(rng.random(4000) < 0.003, 20 * sigma, best), sigma) for _ in range(400)]
     assert np.mean(np.abs(alike) >= 3) <= 0.01
+
+
+def test_a_right_pose_is_not_pulled_home_by_residuals_of_other_points(near_square_plate):
+    """The slide home weighs tries refined on the medium points against the pose's residual scale on
+    the same points: a right pose whose own residual scale was taken on other points, five times
+    noisier, is left as it is (the tries, back home with the medium points' noise, looked five
+    times better and it was "pulled home" onto itself)."""
+    from workcal_wb.core.match import _slid_home
+    from workcal_wb.core.refine import MAD_TO_SIGMA, RefineState
+
+    mesh, surface = near_square_plate
+    points, truth = _view(mesh, 5, noise=0.1, samples=4000)
+    T = frames.invert(truth)
+    noisier = frames.apply(T, points + np.random.default_rng(5).normal(0.0, 0.5, points.shape))
+    _, idx, found = surface.nearest_cell(noisier, 2.0)
+    sigma = MAD_TO_SIGMA * float(np.median(np.abs(surface.plane_residuals(noisier[found], idx[found]))))
+    assert sigma > 0.4
+    state = RefineState(T, sigma=sigma, gate=2.0, scale=0.7)
+    assert _slid_home(state, points[:3000], surface, 0.1, polish=lambda home: home) is state
 
 
 def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):

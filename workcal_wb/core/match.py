@@ -525,6 +525,7 @@ class Judge:
         self.noise = float("nan")  # what residuals scatter by: the noise of the scan (on the part) and the model
         self.gate = float("nan")
         self.viewpoint, self.source, self.view = None, "none", None
+        self._distance_cache = {}  # (pose, gate) -> _distances
         self._level(fine=False)
 
     def _level(self, fine: bool) -> None:
@@ -655,14 +656,20 @@ class Judge:
     def _distances(self, T: np.ndarray) -> np.ndarray:
         """Each verdict point's distance from the model's surface under pose T (mm): exact against a
         mesh; against a point model the point-to-plane residual, or the distance past the nearest
-        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach."""
-        moved = frames.apply(T, self.all_points)
-        if self.surface.is_mesh:
-            return self.surface.exact_distance(moved)
-        reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
-        d, idx, found = self.surface.nearest_cell(moved, reach)
-        plane = np.abs(self.surface.plane_residuals(moved, idx))
-        return np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
+        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach.
+        Computed once per pose (and gate): the best's and its turns' are asked for again by rank."""
+        key = (np.asarray(T, float).tobytes(), self.gate)
+        if key not in self._distance_cache:
+            moved = frames.apply(T, self.all_points)
+            if self.surface.is_mesh:
+                distances = self.surface.exact_distance(moved)
+            else:
+                reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
+                d, idx, found = self.surface.nearest_cell(moved, reach)
+                plane = np.abs(self.surface.plane_residuals(moved, idx))
+                distances = np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
+            self._distance_cache[key] = distances
+        return self._distance_cache[key]
 
     def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
         """Whether the rival, seen from the side of the part its own matched surface faces, would
@@ -847,8 +854,9 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
 def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish):
     """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
     HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
-    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN) and keeps at
-    least as many scan points on the model.  A refinement that stopped in a local minimum (a pose
+    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual
+    scales on the medium points the tries are refined on) and keeps at least as many scan points on
+    the model.  A refinement that stopped in a local minimum (a pose
     slid along a curved part: the scan points past the part's end pull it nowhere, point-to-plane)
     is pulled home; a right pose (within FAR_OFF_FIT noises) is never touched."""
     if not state.sigma > FAR_OFF_FIT * noise:
@@ -858,14 +866,17 @@ def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, p
     if found.sum() < MIN_SCAN_POINTS:
         return state
     _, vecs, centre, radius = gelfand(moved[found], surface.normals[idx[found]])
-    home = state
+    # The tries are refined on the medium points: the pose's residual scale there is the one to beat
+    # (a polished pose's own sigma is taken on the fine points).
+    here = MAD_TO_SIGMA * float(np.median(np.abs(surface.plane_residuals(moved[found], idx[found]))))
+    home, home_sigma = state, here
     for v in vecs.T:
         twist = unit_twist(v, centre, radius, moved[found])
         for amount in (*HOME_SHIFTS_MM, *(-a for a in HOME_SHIFTS_MM)):
             tried = refine(medium, surface, slide(twist, centre, amount) @ state.T, state.gate, state.scale)
-            if tried.sigma < home.sigma:
-                home = tried
-    if home is state or not home.sigma <= HOME_GAIN * state.sigma:
+            if tried.sigma < home_sigma:
+                home, home_sigma = tried, tried.sigma
+    if home is state or not home_sigma <= HOME_GAIN * here:
         return state
     before, after = inlier_scores(medium, surface, [state.T, home.T], state.gate)
     return polish(home) if after >= before else state
