@@ -856,9 +856,9 @@ def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, p
     HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
     stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual
     scales on the medium points the tries are refined on) and keeps at least as many scan points on
-    the model.  A refinement that stopped in a local minimum (a pose
-    slid along a curved part: the scan points past the part's end pull it nowhere, point-to-plane)
-    is pulled home; a right pose (within FAR_OFF_FIT noises) is never touched."""
+    the model.  A refinement that stopped in a local minimum (a pose slid along a curved part: the
+    scan points past the part's end pull it nowhere, point-to-plane) is pulled home; a right pose
+    (within FAR_OFF_FIT noises) is never touched."""
     if not state.sigma > FAR_OFF_FIT * noise:
         return state
     moved = frames.apply(state.T, medium)
