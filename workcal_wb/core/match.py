@@ -806,9 +806,9 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
     differences d = w(rival) - w(best) are paired (one scan, both poses): when the two poses explain
     the scan alike (a symmetry, a view that cannot tell), each difference is as likely either way,
     so their sum is tested against its sign-flip distribution (sign_flip_z): exactly when a few tens
-    of points differ (a flip leaves ten points off: the chance of all ten one way is 2^-10, 3.1
-    standard errors, however far off each lies), about normally when more do.  Negative when the
-    best leaves more far off."""
+    of points differ (nine points off the rival and none off the best score 3.1 standard errors,
+    however far off each lies), about normally when more do.  Negative when the best leaves more
+    far off."""
     def weight(distance):
         u2 = (distance / max(sigma, 1e-9)) ** 2
         return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
@@ -819,11 +819,13 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
 def sign_flip_z(d: np.ndarray) -> float:
     """The paired differences ``d`` (weights in [-1, 1], each as likely positive as negative when
     nothing tells the poses apart) as a signed normal score: the standard normal quantile of the
-    chance that their sum comes out at least as far from zero on its side under random signs (a
-    one-sided p-value).  Exact, on a grid of 1/SIGN_FLIP_STEPS, for up to EXACT_SIGN_FLIPS nonzero
-    differences (the normal approximation of a sum of a few unequal terms is poor: ten points all
-    one way scored 2.8 to 3.2 by their sizes); beyond, the sum over its null standard deviation
-    sqrt(sum d^2).  0 when the differences cancel."""
+    chance that their sum comes out further from zero on its side under random signs, plus half the
+    chance that it comes out exactly as far (a one-sided mid-p value: the plain exact p-value of a
+    discrete sum is conservative, its mid-p about as often below a level as a continuous one: nine
+    differences all one way, 2^-10, 3.1 standard errors; eight, 2.9).  Exact, on a grid of
+    1/SIGN_FLIP_STEPS, for up to EXACT_SIGN_FLIPS nonzero differences (the normal approximation of a
+    sum of a few unequal terms is poor: ten points all one way scored 2.8 to 3.2 by their sizes);
+    beyond, the sum over its null standard deviation sqrt(sum d^2).  0 when the differences cancel."""
     steps = np.rint(np.asarray(d, float) * SIGN_FLIP_STEPS).astype(np.int64)
     steps = steps[steps != 0]
     total = int(steps.sum())
@@ -837,7 +839,9 @@ def sign_flip_z(d: np.ndarray) -> float:
         grown[:len(chance)] += chance / 2
         grown[2 * k:] += chance / 2
         chance = grown
-    p = float(chance[len(chance) // 2 + abs(total):].sum())  # the distribution is symmetric about its middle
+    # The distribution is symmetric about its middle; a sum exactly as far out counts half (mid-p).
+    at = len(chance) // 2 + abs(total)
+    p = float(chance[at + 1:].sum() + chance[at] / 2)
     return float(np.copysign(-NormalDist().inv_cdf(p), total)) if p < 0.5 else 0.0
 
 
