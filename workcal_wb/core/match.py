@@ -28,6 +28,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from statistics import NormalDist
 
 import numpy as np
 
@@ -114,6 +115,9 @@ EVIDENCE_SIGMAS = 3.0
 # residual scales off its surface, fully from FAR_OFF_SIGMAS (further off is no further evidence: an
 # outlier is an outlier).
 FAR_OFF_SIGMAS = 10.0
+# Up to this many points differing between two poses, the far-off test's chance is exact (all 2^n
+# sign patterns, their weights on a grid of 1/SIGN_FLIP_STEPS: sign_flip_z); beyond, its normal approximation.
+EXACT_SIGN_FLIPS, SIGN_FLIP_STEPS = 64, 256
 # ... and it only rules out a turn of the best when the best's residual scale is at most this many
 # times the noise (right poses measured 1-2x; a pose slid along a curved part, held there by a few
 # points, 4x).
@@ -521,6 +525,7 @@ class Judge:
         self.noise = float("nan")  # what residuals scatter by: the noise of the scan (on the part) and the model
         self.gate = float("nan")
         self.viewpoint, self.source, self.view = None, "none", None
+        self._distance_cache = {}  # (pose, gate) -> _distances
         self._level(fine=False)
 
     def _level(self, fine: bool) -> None:
@@ -651,14 +656,20 @@ class Judge:
     def _distances(self, T: np.ndarray) -> np.ndarray:
         """Each verdict point's distance from the model's surface under pose T (mm): exact against a
         mesh; against a point model the point-to-plane residual, or the distance past the nearest
-        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach."""
-        moved = frames.apply(T, self.all_points)
-        if self.surface.is_mesh:
-            return self.surface.exact_distance(moved)
-        reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
-        d, idx, found = self.surface.nearest_cell(moved, reach)
-        plane = np.abs(self.surface.plane_residuals(moved, idx))
-        return np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
+        sample's neighbourhood (a point beyond the surface's edge), inf beyond the far-off reach.
+        Computed once per pose (and gate): the best's and its turns' are asked for again by rank."""
+        key = (np.asarray(T, float).tobytes(), self.gate)
+        if key not in self._distance_cache:
+            moved = frames.apply(T, self.all_points)
+            if self.surface.is_mesh:
+                distances = self.surface.exact_distance(moved)
+            else:
+                reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
+                d, idx, found = self.surface.nearest_cell(moved, reach)
+                plane = np.abs(self.surface.plane_residuals(moved, idx))
+                distances = np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
+            self._distance_cache[key] = distances
+        return self._distance_cache[key]
 
     def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
         """Whether the rival, seen from the side of the part its own matched surface faces, would
@@ -792,17 +803,46 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
     (FAR_OFF_SIGMAS^2 - 3^2), 0, 1) for u = distance / sigma, so a point within EVIDENCE_SIGMAS of
     the surface counts nothing (within the noise, a pose's small misfit must not decide), one
     FAR_OFF_SIGMAS or more off counts fully, and no outlier counts more than that.  The per-point
-    differences d = w(rival) - w(best) are paired (one scan, both poses) and tested as a mean:
-    sum(d) / sqrt(sum((d - mean d)^2)).  Two poses that explain the scan alike (a symmetry, a view
-    that cannot tell) leave as many points off each way, so the statistic is about standard normal
-    (at most sqrt(n) for n points off one way only: 3 standard errors need at least 9 points all off
-    the rival).  Negative when the best leaves more far off."""
+    differences d = w(rival) - w(best) are paired (one scan, both poses): when the two poses explain
+    the scan alike (a symmetry, a view that cannot tell), each difference is as likely either way,
+    so their sum is tested against its sign-flip distribution (sign_flip_z): exactly when a few tens
+    of points differ (nine points off the rival and none off the best score 3.1 standard errors,
+    however far off each lies), about normally when more do.  Negative when the best leaves more
+    far off."""
     def weight(distance):
         u2 = (distance / max(sigma, 1e-9)) ** 2
         return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
 
-    d = weight(rival) - weight(best)
-    return float(d.sum() / np.sqrt(max(float(np.sum((d - d.mean()) ** 2)), 1e-12)))
+    return sign_flip_z(weight(rival) - weight(best))
+
+
+def sign_flip_z(d: np.ndarray) -> float:
+    """The paired differences ``d`` (weights in [-1, 1], each as likely positive as negative when
+    nothing tells the poses apart) as a signed normal score: the standard normal quantile of the
+    chance that their sum comes out further from zero on its side under random signs, plus half the
+    chance that it comes out exactly as far (a one-sided mid-p value: the plain exact p-value of a
+    discrete sum is conservative, its mid-p about as often below a level as a continuous one: nine
+    differences all one way, 2^-10, 3.1 standard errors; eight, 2.9).  Exact, on a grid of
+    1/SIGN_FLIP_STEPS, for up to EXACT_SIGN_FLIPS nonzero differences (the normal approximation of a
+    sum of a few unequal terms is poor: ten points all one way scored 2.8 to 3.2 by their sizes);
+    beyond, the sum over its null standard deviation sqrt(sum d^2).  0 when the differences cancel."""
+    steps = np.rint(np.asarray(d, float) * SIGN_FLIP_STEPS).astype(np.int64)
+    steps = steps[steps != 0]
+    total = int(steps.sum())
+    if total == 0:
+        return 0.0
+    if len(steps) > EXACT_SIGN_FLIPS:
+        return total / float(np.sqrt(np.sum(steps.astype(float) ** 2)))
+    chance = np.ones(1)  # chance[s] of the sum s - offset under random signs, built one difference at a time
+    for k in np.abs(steps):
+        grown = np.zeros(len(chance) + 2 * k)
+        grown[:len(chance)] += chance / 2
+        grown[2 * k:] += chance / 2
+        chance = grown
+    # The distribution is symmetric about its middle; a sum exactly as far out counts half (mid-p).
+    at = len(chance) // 2 + abs(total)
+    p = float(chance[at + 1:].sum() + chance[at] / 2)
+    return float(np.copysign(-NormalDist().inv_cdf(p), total)) if p < 0.5 else 0.0
 
 
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
@@ -818,10 +858,11 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
 def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish):
     """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
     HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
-    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN) and keeps at
-    least as many scan points on the model.  A refinement that stopped in a local minimum (a pose
-    slid along a curved part: the scan points past the part's end pull it nowhere, point-to-plane)
-    is pulled home; a right pose (within FAR_OFF_FIT noises) is never touched."""
+    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual
+    scales on the medium points the tries are refined on) and keeps at least as many scan points on
+    the model.  A refinement that stopped in a local minimum (a pose slid along a curved part: the
+    scan points past the part's end pull it nowhere, point-to-plane) is pulled home; a right pose
+    (within FAR_OFF_FIT noises) is never touched."""
     if not state.sigma > FAR_OFF_FIT * noise:
         return state
     moved = frames.apply(state.T, medium)
@@ -829,14 +870,17 @@ def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, p
     if found.sum() < MIN_SCAN_POINTS:
         return state
     _, vecs, centre, radius = gelfand(moved[found], surface.normals[idx[found]])
-    home = state
+    # The tries are refined on the medium points: the pose's residual scale there is the one to beat
+    # (a polished pose's own sigma is taken on the fine points).
+    here = MAD_TO_SIGMA * float(np.median(np.abs(surface.plane_residuals(moved[found], idx[found]))))
+    home, home_sigma = state, here
     for v in vecs.T:
         twist = unit_twist(v, centre, radius, moved[found])
         for amount in (*HOME_SHIFTS_MM, *(-a for a in HOME_SHIFTS_MM)):
             tried = refine(medium, surface, slide(twist, centre, amount) @ state.T, state.gate, state.scale)
-            if tried.sigma < home.sigma:
-                home = tried
-    if home is state or not home.sigma <= HOME_GAIN * state.sigma:
+            if tried.sigma < home_sigma:
+                home, home_sigma = tried, tried.sigma
+    if home is state or not home_sigma <= HOME_GAIN * here:
         return state
     before, after = inlier_scores(medium, surface, [state.T, home.T], state.gate)
     return polish(home) if after >= before else state
