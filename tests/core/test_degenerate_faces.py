@@ -93,3 +93,19 @@ def test_faces_folded_onto_each_other_are_sampled_within_a_budget(monkeypatch):
     assert len(model.points) > 20_000  # the budget is used, not thrown away
     assert np.allclose(model.exact_distance(np.array([[5.0, 5, -2], [20, 5, 5]])), [2, 10], atol=1e-4)
     assert any("folded.stl" in w and "sampled more coarsely" in w for w in model.warnings), model.warnings
+
+
+def test_a_mesh_whose_faces_all_cover_nothing_is_refused_naming_the_file(tmp_path):
+    """With every face dropped the model was quietly its bare vertices (8 box corners) taken for a
+    scanned surface: a mesh file with no usable face is an error."""
+    import pytest
+
+    from workcal_wb.core.errors import InputError
+    from workcal_wb.core.readers import read_cloud
+    from workcal_wb.core.surface import SurfaceModel
+
+    path = tmp_path / "flat.off"
+    path.write_text("OFF\n8 3 0\n" + "".join(f"{x:g} {y:g} {z:g}\n" for x, y, z in CORNERS)
+                    + "3 0 0 1\n3 2 2 2\n3 1 3 1\n")
+    with pytest.raises(InputError, match=r"flat.off: none of its 3 faces covers any area"):
+        SurfaceModel(read_cloud(path))

@@ -108,6 +108,9 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         repeated = _repeated_faces(cloud.triangles)
         if repeated.any():
             warnings.append(f"{cloud.name}: ignored {int(repeated.sum())} faces repeating an earlier face")
+        if (collapsed | repeated).all():  # its vertices alone are no model of its surface
+            raise InputError(f"{cloud.name}: none of its {len(collapsed)} faces covers any area (each has two "
+                             "corners at one point)")
         return _verified(Cloud(pts, cloud.normals, cloud.triangles[~(collapsed | repeated)], cloud.name, warnings,
                                cloud.sensors, cloud.sensor_of))
     keep = np.flatnonzero(finite)
