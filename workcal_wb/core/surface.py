@@ -288,9 +288,8 @@ class SurfaceModel:
             spacing = self.diagonal / SAMPLES_PER_DIAGONAL
             area = pointops.triangle_normals_and_areas(model.points, model.triangles)[1]
             if area.sum() > MAX_MESH_SAMPLES * spacing**2:
-                warnings.append(f"{model.name}: its faces cover {area.sum() / self.diagonal**2:.0f} times the "
-                                      "area of a square as wide as the part (duplicate or folded faces?); sampled "
-                                      "more coarsely")
+                warnings.append(f"{model.name}: its faces cover {area.sum() / self.diagonal**2:.0f} times the area "
+                                "of a square as wide as the part (duplicate or folded faces?); sampled more coarsely")
                 spacing = float(np.sqrt(area.sum() / MAX_MESH_SAMPLES))
             points, face_ids = pointops.sample_triangles(model.points, model.triangles, spacing, seed)
             self.face_normals = pointops.triangle_normals_and_areas(model.points, model.triangles)[0]
