@@ -105,8 +105,14 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         collapsed = _collapsed_faces(pts, cloud.triangles)
         if collapsed.any():
             warnings.append(f"{cloud.name}: ignored {int(collapsed.sum())} faces with two corners at one point")
-        return _verified(Cloud(pts, cloud.normals, cloud.triangles[~collapsed], cloud.name, warnings, cloud.sensors,
-                               cloud.sensor_of))
+        repeated = _repeated_faces(cloud.triangles)
+        if repeated.any():
+            warnings.append(f"{cloud.name}: ignored {int(repeated.sum())} faces repeating an earlier face")
+        if (collapsed | repeated).all():  # its vertices alone are no model of its surface
+            raise InputError(f"{cloud.name}: none of its {len(collapsed)} faces covers any area (each has two "
+                             "corners at one point)")
+        return _verified(Cloud(pts, cloud.normals, cloud.triangles[~(collapsed | repeated)], cloud.name, warnings,
+                               cloud.sensors, cloud.sensor_of))
     keep = np.flatnonzero(finite)
     if len(keep) < len(pts):
         warnings.append(f"{cloud.name}: ignored {len(pts) - len(keep)} points with NaN or infinite coordinates "
@@ -134,6 +140,17 @@ def _collapsed_faces(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     held = (points - points.mean(axis=0)).astype(np.float32)
     a, b, c = (held[triangles[:, i]] for i in range(3))
     return (a == b).all(axis=1) | (b == c).all(axis=1) | (a == c).all(axis=1)
+
+
+def _repeated_faces(triangles: np.ndarray) -> np.ndarray:
+    """Mask of the faces on the same three vertices as an earlier face (either winding): a copy covers
+    nothing new, and a million copies would ask the model for billions of samples."""
+    corners = np.sort(triangles, axis=1)
+    order = np.lexsort(corners.T[::-1])  # by first, then second, then third corner; stable
+    same = (corners[order[1:]] == corners[order[:-1]]).all(axis=1)
+    mask = np.zeros(len(triangles), bool)
+    mask[order[1:][same]] = True
+    return mask
 
 
 def _within(values: np.ndarray, limit: float) -> np.ndarray:

@@ -24,6 +24,9 @@ from .geometry import Cloud, checked, shape_kind
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
 # the query point (so residuals are exact), coarse enough to keep the tree ~100k samples.
 SAMPLES_PER_DIAGONAL = 250
+# At most about this many mesh samples: faces whose area is many times what a part of their size
+# has (duplicated, or folded onto each other) would otherwise ask for billions; the spacing grows.
+MAX_MESH_SAMPLES = 2_000_000
 # A cell grid never has more cells than this (4 bytes each); its cell grows instead.
 MAX_GRID_CELLS = 16_000_000
 # A cell's stored value: 0 not yet looked up, -1 no sample within the bound, else sample index + 1.
@@ -280,15 +283,20 @@ class SurfaceModel:
         self.diagonal = model.diagonal()
         self.is_mesh = model.is_mesh
         self.face_normals = None
+        warnings = list(model.warnings)
         if model.is_mesh:
             spacing = self.diagonal / SAMPLES_PER_DIAGONAL
+            area = pointops.triangle_normals_and_areas(model.points, model.triangles)[1]
+            if area.sum() > MAX_MESH_SAMPLES * spacing**2:
+                warnings.append(f"{model.name}: its faces cover {area.sum() / self.diagonal**2:.0f} times the area "
+                                "of a square as wide as the part (duplicate or folded faces?); sampled more coarsely")
+                spacing = float(np.sqrt(area.sum() / MAX_MESH_SAMPLES))
             points, face_ids = pointops.sample_triangles(model.points, model.triangles, spacing, seed)
             self.face_normals = pointops.triangle_normals_and_areas(model.points, model.triangles)[0]
             if pointops.signed_volume(model.points, model.triangles) < 0:
                 self.face_normals = -self.face_normals  # wound inward (e.g. the Stanford bunny): make them outward
             normals = self.face_normals[face_ids]
             # Each sample stands for its share of its face (small faces get one sample each).
-            area = pointops.triangle_normals_and_areas(model.points, model.triangles)[1]
             weights = area[face_ids] / np.bincount(face_ids, minlength=len(area))[face_ids]
         else:
             points = model.points
@@ -300,7 +308,7 @@ class SurfaceModel:
             weights = np.ones(len(points))
         self.points, self.normals, self.spacing = points, normals, spacing
         self._tree = _SampleTree(points)
-        self.warnings = list(model.warnings)
+        self.warnings = warnings
         self.vertices = model.points
         self.triangles = model.triangles
         rng = np.random.default_rng(seed)
@@ -508,19 +516,38 @@ class SurfaceModel:
         scene = o3d.t.geometry.RaycastingScene()
         scene.add_triangles(o3d.core.Tensor((self.vertices - origin).astype(np.float32)),
                             o3d.core.Tensor(self.triangles.astype(np.uint32)))
-        return scene, lambda points: o3d.core.Tensor((points - origin).astype(np.float32)), origin
+        return scene, o3d, origin
+
+    def _query(self, points: np.ndarray, ask):
+        """``ask(scene, query tensor)`` for the points that are finite in float32, as a dict of
+        numpy arrays with NaN rows for the others: open3d aborts the whole process on a NaN or
+        infinite query point (an Eigen assertion), and 1e300 is infinite in float32."""
+        scene, o3d, origin = self._bvh
+        with np.errstate(over="ignore", invalid="ignore"):
+            held = (np.asarray(points, float).reshape(-1, 3) - origin).astype(np.float32)
+        finite = np.isfinite(held).all(axis=1)
+        answer = {key: value.numpy() for key, value in ask(scene, o3d.core.Tensor(held[finite])).items()}
+        if finite.all():
+            return answer
+        full = {}
+        for key, value in answer.items():
+            full[key] = np.full((len(held),) + value.shape[1:], np.nan)
+            full[key][finite] = value
+        return full
 
     def closest_points(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(exact closest point on the mesh, outward normal of its face) for each point; meshes only."""
-        scene, query, origin = self._bvh
-        answer = scene.compute_closest_points(query(points))
-        closest = answer["points"].numpy().astype(float) + origin
-        return closest, self.face_normals[answer["primitive_ids"].numpy().astype(np.int64)]
+        """(exact closest point on the mesh, outward normal of its face) for each point (NaN for a
+        point that is not finite); meshes only."""
+        answer = self._query(points, lambda scene, q: scene.compute_closest_points(q))
+        face = answer["primitive_ids"]
+        known = np.isfinite(face)
+        normals = np.full((len(face), 3), np.nan)
+        normals[known] = self.face_normals[face[known].astype(np.int64)]
+        return answer["points"].astype(float) + self._bvh[2], normals
 
     @cached_property
     def exact_distance(self):
         """Exact unsigned point-to-mesh distance function (open3d BVH), or None for point models."""
         if not self.is_mesh:
             return None
-        scene, query, _ = self._bvh
-        return lambda points: scene.compute_distance(query(points)).numpy().astype(float)
+        return lambda points: self._query(points, lambda scene, q: {"d": scene.compute_distance(q)})["d"].astype(float)
