@@ -65,6 +65,19 @@ def test_a_query_point_that_is_not_finite_in_float32_gets_nan_not_a_crash():
     assert np.allclose(normals[[0, 3]], [[0, 0, -1], [1, 0, 0]])
 
 
+def test_corners_a_float32_hair_apart_count_as_one_point():
+    """Two corners 1e-40 mm apart about the vertices' mean are distinct float32 numbers (denormals),
+    but the edge's squared length is 0 in float32: open3d aborted on that face as on a repeated corner."""
+    done = _run("points = np.vstack([corners - 5, [[0, 0, 0], [1e-40, 0, 0], [0, 5, -5]]])\n"
+                "model = SurfaceModel(Cloud(points, triangles=np.vstack([faces, [[8, 9, 10]]]), name='box'))\n"
+                "print(json.dumps([model.exact_distance(np.array([[7.0, 0, 0], [0.1, 0.1, 0.1]])).tolist(), len(model.triangles),"
+                " model.warnings]))\n")
+    assert done.returncode == 0, done.stderr[-2000:]
+    distances, faces_kept, warnings = json.loads(done.stdout)
+    assert np.allclose(distances, [2, 4.9], atol=1e-4) and faces_kept == 12
+    assert any("1 faces with two corners at one point" in w for w in warnings), warnings
+
+
 def test_repeated_faces_are_dropped_with_a_warning_not_sampled_without_bound():
     """Samples follow the faces' area: 500 copies of each face of a box asked for 62 million samples
     (minutes), a million faces on one edge for 10 billion (78 GB).  A copy covers nothing new."""

@@ -135,11 +135,13 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
 
 def _collapsed_faces(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Mask of the faces with two corners at one point as a distance query holds them (float32 about
-    the vertices' mean, SurfaceModel._bvh): such a face covers nothing, and open3d's distance query
-    aborts the whole process on one (an Eigen assertion)."""
+    the vertices' mean, SurfaceModel._bvh): an edge whose squared length is 0 in float32 (equal corners,
+    or corners a denormal apart).  Such a face covers nothing, and open3d's distance query aborts the
+    whole process on one (an Eigen assertion)."""
     held = (points - points.mean(axis=0)).astype(np.float32)
     a, b, c = (held[triangles[:, i]] for i in range(3))
-    return (a == b).all(axis=1) | (b == c).all(axis=1) | (a == c).all(axis=1)
+    with np.errstate(under="ignore"):
+        return np.logical_or.reduce([np.einsum("ij,ij->i", e, e) == 0 for e in (b - a, c - b, a - c)])
 
 
 def _repeated_faces(triangles: np.ndarray) -> np.ndarray:

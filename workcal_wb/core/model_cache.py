@@ -35,7 +35,7 @@ from .errors import OutputError
 from .geometry import Cloud
 from .surface import SurfaceModel
 
-FORMAT_VERSION = 3  # 2: a mesh is prepared without its collapsed faces, 3: nor its repeated ones (geometry.checked)
+FORMAT_VERSION = 3  # 2: a mesh is prepared without its collapsed faces, 3: nor its repeated ones (geometry.checked), and a precomputed grid holds its diagonal cells
 MAGIC = b"WorkCal prepared model\n"
 SUFFIX = ".model"
 DEFAULT_MAX_BYTES = 2 << 30
