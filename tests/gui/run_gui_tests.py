@@ -16,7 +16,8 @@ def _run():
 
     # FreeCAD 1.x sends sys.stdout to its Report view only; the run's log belongs on the terminal.
     sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
-    rc = pytest.main(["-q", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), TESTS])
+    # --durations: the slowest GUI tests named in the CI log, as the headless run does (CI must stay well under 30 min).
+    rc = pytest.main(["-q", "-rfEs", "--durations=10", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), TESTS])
     sys.stdout.flush()
     os._exit(int(rc))  # FreeCAD ignores QApplication.exit codes; leave with pytest's status
 

@@ -122,12 +122,17 @@ def bunny_reference_poses(folder: Path, conf: str = "bun.conf") -> dict[str, np.
 
 def bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS) -> list[Case]:
     """Each real scan against bun_zipper.ply, clean and with the four degradations."""
+    return list(iter_bunny_cases(folder, seed, scans))
+
+
+def iter_bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS):
+    """bunny_cases made one scan at a time, when asked for (the same cases, in the same order), so a
+    benchmark holds only the current scan's cases."""
     from ..readers import read_cloud
 
     rng = np.random.default_rng(seed)
     model = read_cloud(folder / "bun_zipper.ply", units="m")
     poses = bunny_reference_poses(folder)
-    cases = []
     for name in scans:
         scan = read_cloud(folder / name, units="m").points
         motion = random_motion(rng)
@@ -141,9 +146,9 @@ def bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS) -> list[Case]:
             "table, box, 20 % stray": with_clutter(moved, truth, model, BUNNY_UP, rng),
             "lump + carved patch": with_clay_change(moved, rng),
         }
-        cases += [Case(f"{stem} {kind}", f"bunny {kind}", pts, model, truth, exact=False)
-                  for kind, pts in variants.items()]
-    return cases
+        del scan, moved
+        for kind in list(variants):
+            yield Case(f"{stem} {kind}", f"bunny {kind}", variants.pop(kind), model, truth, exact=False)
 
 
 # --- Simulated scans (exact truth) -------------------------------------------------------------
@@ -159,32 +164,41 @@ def simulated_cases(seed: int = 0, quick: bool = False) -> list[Case]:
     workpiece region of a capture zoomed on the workpiece (the paper's second, zoomed capture; the
     calibration matches such a region), and for the car also the whole scene with platform and
     L-block around it, as the default capture framing both objects sees it."""
-    return list(iter_simulated_cases(seed, quick))
+    return [case for group in iter_simulated_groups(seed, quick) for case in group]
 
 
-def iter_simulated_cases(seed: int = 0, quick: bool = False):
-    """simulated_cases one at a time, made when asked for (a model's cases one after the other), so a
-    benchmark holds only the cases of the model it is matching."""
-    from ..simulate.scanner import Scanner
-    from ..simulate.scene import build_scene
-
+def iter_simulated_groups(seed: int = 0, quick: bool = False):
+    """simulated_cases one model at a time (a list of that model's cases), made when asked for, so a
+    benchmark holds only the cases of the model it is matching and can let that model go before the
+    next one's scans are made."""
     for i in range(2 if quick else 5):
         azimuth = -75.0 + 35.0 * i  # the side facing away from the L-block, which can hide the workpiece
         for workpiece in ("car", "figurine"):
-            scene = build_scene(workpiece, seed=seed + i)
-            model = scene.workpiece_model()
-            zoomed = zoomed_on_workpiece(scene, azimuth, seed + i).scan(scene)
-            turn = 0
-            while zoomed.mask("workpiece").sum() < MIN_REGION_POINTS and turn < 360:  # hidden behind the L-block
-                turn += 30
-                zoomed = zoomed_on_workpiece(scene, azimuth + turn, seed + i).scan(scene)
-            yield Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
-                       zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True)
-            if workpiece == "car":
-                del zoomed
-                scan = Scanner.aimed_at(scene, azimuth_deg=azimuth, seed=seed + i, noise_sigma_mm=0.1).scan(scene)
-                yield Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model, scan.U,
-                           exact=True)
+            yield _simulated_model_cases(workpiece, azimuth, seed + i, i)
+
+
+def _simulated_model_cases(workpiece: str, azimuth: float, seed: int, i: int) -> list[Case]:
+    """One model's simulated cases; the scene and the whole captures go when it returns (only the
+    workpiece region of the zoomed capture is kept)."""
+    from ..simulate.scanner import Scanner
+    from ..simulate.scene import build_scene
+
+    scene = build_scene(workpiece, seed=seed)
+    model = scene.workpiece_model()
+    zoomed = zoomed_on_workpiece(scene, azimuth, seed).scan(scene)
+    turn = 0
+    while zoomed.mask("workpiece").sum() < MIN_REGION_POINTS and turn < 360:  # hidden behind the L-block
+        turn += 30
+        zoomed = None  # one capture in memory at a time
+        zoomed = zoomed_on_workpiece(scene, azimuth + turn, seed).scan(scene)
+    cases = [Case(f"{workpiece} #{i} region", f"simulated {workpiece}, region",
+                  zoomed.points[zoomed.mask("workpiece")], model, zoomed.U, exact=True)]
+    if workpiece == "car":
+        zoomed = None
+        scan = Scanner.aimed_at(scene, azimuth_deg=azimuth, seed=seed, noise_sigma_mm=0.1).scan(scene)
+        cases.append(Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model, scan.U,
+                          exact=True))
+    return cases
 
 
 def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: float = 45.0,

@@ -5,7 +5,8 @@ generated deterministically from the seed in each process.  The model side is pr
 model in each process, outside the timing, as a shop matching scan after scan against one model
 would: WorkCal's SurfaceModel with its coarse features and nearest-sample grid (match.prepare),
 stock's voxel grid, normals and FPFH of the model and the full model cloud with normals; it is let
-go when the cases move on to the next model, and the simulated cases are made one model at a time.  The
+go (and the freed heap handed back) before the next model's cases are made, and the cases are made
+when asked for (a bunny scan's five at a time, a simulated model's when its turn comes).  The
 processes alternate (WorkCal, stock, WorkCal, stock, ...) and a case's time is its fastest round,
 so a burst of load on the shared machine does not land on one method only.
 """
@@ -73,16 +74,17 @@ def bunny_folder(shared: Path | None) -> Path | None:
     return folder if folder and (folder / "bun_zipper.ply").exists() else None
 
 
-def build_cases(shared: Path | None, seed: int, quick: bool):
-    """The bunny cases (when the shared data is there) and the simulated ones, the simulated ones made
-    when asked for: a process matching them holds only the current model's cases."""
-    from .cases import BUNNY_SCANS, bunny_cases, iter_simulated_cases
+def build_case_groups(shared: Path | None, seed: int, quick: bool):
+    """The bunny cases (when the shared data is there) and the simulated ones, in groups that share one
+    model; each group's cases are made when asked for, so a process matching them holds only the current
+    model's cases and can let the model's prepared form go before the next group's scans are made."""
+    from .cases import BUNNY_SCANS, iter_bunny_cases, iter_simulated_groups
 
     folder = bunny_folder(shared)
     scans = ("bun000.ply", "bun045.ply") if quick else BUNNY_SCANS
     if folder:
-        yield from bunny_cases(folder, seed, scans=scans)
-    yield from iter_simulated_cases(seed, quick=quick)
+        yield iter_bunny_cases(folder, seed, scans=scans)
+    yield from iter_simulated_groups(seed, quick=quick)
 
 
 def _run_method(method: str, shared, seed: int, quick: bool, queue) -> None:
@@ -92,24 +94,39 @@ def _run_method(method: str, shared, seed: int, quick: bool, queue) -> None:
     from ..surface import SurfaceModel
     from .stock import prepare_stock_model, stock_open3d
 
-    model, prepared = None, None
     rows = []
-    for case in build_cases(shared, seed, quick):
-        if case.model is not model:  # once per model, untimed (see the module docstring); the cases of
-            model = case.model  # one model come one after the other, so the last model's is let go
-            prepared = None
-            prepared = (prepare(SurfaceModel(model, seed)) if method == WORKCAL
-                        else prepare_stock_model(model.points, model.diagonal()))
-        t0 = time.perf_counter()
-        if method == WORKCAL:
-            result = match(Cloud(case.scan, name=case.name), prepared, seed=seed)
-            estimate, status = result.matrix, result.status
-        else:
-            estimate, status = stock_open3d(case.scan, prepared), "-"
-        elapsed = time.perf_counter() - t0
-        rot, disp = pose_errors(estimate, case.truth, case.model.points)
-        rows.append(Row(case.name, case.group, method, len(case.scan), rot, disp, elapsed, status, case.exact))
+    for group in build_case_groups(shared, seed, quick):
+        prepared = None
+        for case in group:
+            if prepared is None:  # once per model, untimed (see the module docstring)
+                prepared = (prepare(SurfaceModel(case.model, seed)) if method == WORKCAL
+                            else prepare_stock_model(case.model.points, case.model.diagonal()))
+            t0 = time.perf_counter()
+            if method == WORKCAL:
+                result = match(Cloud(case.scan, name=case.name), prepared, seed=seed)
+                estimate, status = result.matrix, result.status
+            else:
+                estimate, status = stock_open3d(case.scan, prepared), "-"
+            elapsed = time.perf_counter() - t0
+            rot, disp = pose_errors(estimate, case.truth, case.model.points)
+            rows.append(Row(case.name, case.group, method, len(case.scan), rot, disp, elapsed, status, case.exact))
+        # The model, its prepared form and its cases go before the next group's scans are made.
+        group = case = prepared = result = None
+        _hand_back_freed_memory()
     queue.put((rows, _peak_mb()))
+
+
+def _hand_back_freed_memory() -> None:
+    """Return the heap that freed objects leave behind to the system (glibc keeps it otherwise, and a
+    process that matched one model would carry its high-water mark into the next model's)."""
+    import ctypes
+    import gc
+
+    gc.collect()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc
+        pass
 
 
 def _run_gcode(queue) -> None:
@@ -363,7 +380,8 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
         "of one sample spacing within 16 spacings of the surface, of two within 32. For stock Open3D it is the model's voxel grid, normals and FPFH and "
         "the full model cloud with normals (the tutorial pipeline would recompute them in every call). Everything "
         "on the scan side is computed inside the timed call. A model's prepared form is let go when the cases "
-        "move on to the next model (the cases of one model come one after the other), for both methods.",
+        "move on to the next model (the cases of one model come one after the other), for both methods, and the "
+        "heap it leaves is handed back to the system (glibc's malloc_trim) before the next model's scans are made.",
         "",
         "Stock is Open3D's global-registration tutorial pipeline (voxel = model diagonal / 50, FPFH, RANSAC on "
         "feature matches with mutual filter, 100k iterations, confidence 0.999, then point-to-plane ICP at "
@@ -382,8 +400,8 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
         "",
         "Peak memory: each method's own process (a fresh interpreter, started for it alone), its largest "
         "resident set (VmHWM) over all the cases of a round, the largest over the rounds. It includes Python, "
-        "numpy, scipy and open3d, the cases at hand (the bunny's scans, read and degraded together; each "
-        "simulated model's scans made when its turn comes) and the current model's prepared form: "
+        "numpy, scipy and open3d, the cases at hand (one bunny scan's five cases at a time; each simulated "
+        "model's scans made when its turn comes) and the current model's prepared form: "
         + ", ".join(f"{m} {mem:.0f} MB" for m, (_, mem) in per_method.items()) + ".",
         "",
     ]
