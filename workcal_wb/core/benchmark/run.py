@@ -96,17 +96,24 @@ def _make_cases(shared, seed: int, quick: bool, folder: Path, queue) -> None:
     groups = 0
     for groups, group in enumerate(build_case_groups(shared, seed, quick), 1):
         with open(folder / f"{groups:03d}.pickle", "wb") as file:
-            pickle.dump(list(group), file, protocol=pickle.HIGHEST_PROTOCOL)
-        group = None
+            for case in group:  # one after the other: a reader holds one case at a time
+                pickle.dump(case, file, protocol=pickle.HIGHEST_PROTOCOL)
+        group = case = None
         _hand_back_freed_memory()
     queue.put(groups)
 
 
 def _case_groups(folder: Path):
-    """The groups _make_cases wrote, one at a time."""
-    for path in sorted(folder.glob("*.pickle")):
+    """The groups _make_cases wrote, each read a case at a time."""
+    def cases(path: Path):
         with open(path, "rb") as file:
-            yield pickle.load(file)
+            while True:
+                try:
+                    yield pickle.load(file)
+                except EOFError:
+                    return
+
+    return [cases(path) for path in sorted(folder.glob("*.pickle"))]
 
 
 def _run_method(method: str, folder: Path, seed: int, queue) -> None:
