@@ -866,13 +866,13 @@ def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, p
     if not state.sigma > FAR_OFF_FIT * noise:
         return state
     moved = frames.apply(state.T, medium)
-    _, idx, found = surface.nearest_cell(moved, state.gate)
+    found, residuals, normals = surface.tangent_planes(moved, state.gate)
     if found.sum() < MIN_SCAN_POINTS:
         return state
-    _, vecs, centre, radius = gelfand(moved[found], surface.normals[idx[found]])
+    _, vecs, centre, radius = gelfand(moved[found], normals)
     # The tries are refined on the medium points: the pose's residual scale there is the one to beat
-    # (a polished pose's own sigma is taken on the fine points).
-    here = MAD_TO_SIGMA * float(np.median(np.abs(surface.plane_residuals(moved[found], idx[found]))))
+    # (a polished pose's own sigma is taken on the fine points), taken as refine takes it.
+    here = MAD_TO_SIGMA * float(np.median(np.abs(residuals)))
     home, home_sigma = state, here
     for v in vecs.T:
         twist = unit_twist(v, centre, radius, moved[found])
