@@ -286,13 +286,12 @@ class SurfaceModel:
         warnings = list(model.warnings)
         if model.is_mesh:
             spacing = self.diagonal / SAMPLES_PER_DIAGONAL
-            area = pointops.triangle_normals_and_areas(model.points, model.triangles)[1]
+            self.face_normals, area = pointops.triangle_normals_and_areas(model.points, model.triangles)
             if area.sum() > MAX_MESH_SAMPLES * spacing**2:
                 warnings.append(f"{model.name}: its faces cover {area.sum() / self.diagonal**2:.0f} times the area "
                                 "of a square as wide as the part (duplicate or folded faces?); sampled more coarsely")
                 spacing = float(np.sqrt(area.sum() / MAX_MESH_SAMPLES))
             points, face_ids = pointops.sample_triangles(model.points, model.triangles, spacing, seed)
-            self.face_normals = pointops.triangle_normals_and_areas(model.points, model.triangles)[0]
             if pointops.signed_volume(model.points, model.triangles) < 0:
                 self.face_normals = -self.face_normals  # wound inward (e.g. the Stanford bunny): make them outward
             normals = self.face_normals[face_ids]
@@ -526,8 +525,10 @@ class SurfaceModel:
         with np.errstate(over="ignore", invalid="ignore"):
             held = (np.asarray(points, float).reshape(-1, 3) - origin).astype(np.float32)
         finite = np.isfinite(held).all(axis=1)
-        answer = {key: value.numpy() for key, value in ask(scene, o3d.core.Tensor(held[finite])).items()}
-        if finite.all():
+        every = bool(finite.all())
+        asked = ask(scene, o3d.core.Tensor(held if every else held[finite]))  # all finite: no copy
+        answer = {key: value.numpy() for key, value in asked.items()}
+        if every:
             return answer
         full = {}
         for key, value in answer.items():
