@@ -299,10 +299,10 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     threads = REFIT_THREADS if options.blas_threads == 1 else 1
     refits = []
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        for _ in range(0, options.resamples, threads):  # drawn a few at a time: the draws of 100 refits are 100 MB
+        for first in range(0, options.resamples, threads):  # drawn a few at a time: the draws of 100 refits are 100 MB
             jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
                      m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
-                    for _ in range(min(threads, options.resamples - len(refits) // 2))
+                    for _ in range(min(threads, options.resamples - first))
                     for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
             refits += pool.map(lambda job: _refit_pose(*job), jobs)
     rotations = []

@@ -77,8 +77,7 @@ def bunny_folder(shared: Path | None) -> Path | None:
 
 def build_case_groups(shared: Path | None, seed: int, quick: bool):
     """The bunny cases (when the shared data is there) and the simulated ones, in groups that share one
-    model; each group's cases are made when asked for, so a process matching them holds only the current
-    model's cases and can let the model's prepared form go before the next group's scans are made."""
+    model; each group's cases are made when asked for, so _make_cases holds one capture at a time."""
     from .cases import BUNNY_SCANS, iter_bunny_cases, iter_simulated_groups
 
     folder = bunny_folder(shared)
