@@ -120,14 +120,15 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
         raise InputError(f"{scan.name}: only {len(valid)} valid points; a scene scan needs far more")
-    kind = shape_kind(points[valid])
+    on_scan = points[valid]  # the valid points, copied once
+    kind = shape_kind(on_scan)
     if kind != "solid":
         raise NotFound(f"{scan.name}: the scan points are {kind}; a scene scan shows the platform and the "
                        "objects standing on it")
     rng = np.random.default_rng(seed)
-    spacing = pointops.median_spacing(points[valid], seed=seed)
+    spacing = pointops.median_spacing(on_scan, seed=seed)
     warnings = []
-    platform = find_platform(points[valid], spacing, rng, up, viewpoint)
+    platform = find_platform(on_scan, spacing, rng, up, viewpoint)
     if platform is None:
         warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
                         "points with the objects standing on one side of it); every point is treated as an object")
