@@ -1,5 +1,6 @@
 """Calibration on simulated scenes with exact truth: W, regions, uncertainty, gates and bad input."""
 import re
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -8,10 +9,11 @@ import pytest
 from workcal_wb.core import frames
 from workcal_wb.core import calibration
 from workcal_wb.core import match as match_module
+from workcal_wb.core import regions as regions_module
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.geometry import Cloud
-from workcal_wb.core.regions import find_regions
+from workcal_wb.core.regions import find_regions, locate
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.scanner import Scanner
@@ -34,13 +36,16 @@ def car():
     scene = build_scene("car", seed=3)
     scan = _scan(scene)
     toolpath, _ = sample_toolpath_points(scene)
-    matches, counted = [], match_module._match
-    match_module._match = lambda *args, **kwargs: matches.append(args[2] is None) or counted(*args, **kwargs)
+    matches, threads, counted = [], [], match_module._match
+    match_module._match = lambda *args, **kwargs: (matches.append(args[2] is None)
+                                                   or threads.append(threading.get_ident())
+                                                   or counted(*args, **kwargs))
     try:
         result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), toolpath_points=toolpath)
     finally:
         match_module._match = counted
     result.matches = matches  # per match made: whether it searched globally (no initial pose)
+    result.match_threads = threads  # and the thread it ran on
     return scene, scan, toolpath, result
 
 
@@ -83,6 +88,20 @@ def test_the_matches_that_located_the_objects_are_the_final_ones(car):
     _, _, _, result = car
     assert result.status == "ok", result.reasons
     assert result.matches == [True, True]
+
+
+def test_the_workpiece_is_searched_while_the_reference_is_and_found_alike(car, user_regions, monkeypatch):
+    """Issue 15 (calibrate in 0.3 s): the two objects' searches ran one after the other on one
+    core.  The workpiece's likeliest cluster is now searched on a second thread while the reference
+    is looked for; the regions and poses are those found one search after the other."""
+    _, scan, _, result = car
+    assert len(set(result.match_threads)) == 2
+    monkeypatch.setattr(regions_module, "_search_ahead", lambda *args, **kwargs: None)
+    cloud = scan.cloud()
+    alone = locate(cloud, *user_regions[0], viewpoint=calibration.scanner_origin(cloud, CalibrationOptions()))
+    for role in ("workpiece", "reference"):
+        assert np.array_equal(alone.as_dict()[role], result.regions[role])
+        assert np.array_equal(getattr(alone, f"{role}_match").matrix, getattr(result, role).matrix)
 
 
 def test_a_paper_method_is_the_method_of_both_final_matches(plain):

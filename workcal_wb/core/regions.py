@@ -8,6 +8,7 @@ matches its model.  The matches found on the way are kept, so calibration does n
 from __future__ import annotations
 
 import copy
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,14 +120,15 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
     if len(valid) < MIN_CLUSTER_POINTS:
         raise InputError(f"{scan.name}: only {len(valid)} valid points; a scene scan needs far more")
-    kind = shape_kind(points[valid])
+    on_scan = points[valid]  # the valid points, copied once
+    kind = shape_kind(on_scan)
     if kind != "solid":
         raise NotFound(f"{scan.name}: the scan points are {kind}; a scene scan shows the platform and the "
                        "objects standing on it")
     rng = np.random.default_rng(seed)
-    spacing = pointops.median_spacing(points[valid], seed=seed)
+    spacing = pointops.median_spacing(on_scan, seed=seed)
     warnings = []
-    platform = find_platform(points[valid], spacing, rng, up, viewpoint)
+    platform = find_platform(on_scan, spacing, rng, up, viewpoint)
     if platform is None:
         warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
                         "points with the objects standing on one side of it); every point is treated as an object")
@@ -145,19 +147,10 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
                                                            blas_threads=blas_threads,
                                                            viewpoint=None if viewpoint is None else tuple(viewpoint)))
-    try:
-        found = _in_turn(objects, ("reference", "workpiece"), report, **context)
-    except NotFound as exc:
-        found = exc
-    # A reference not found, or not for sure, where objects may touch: the workpiece first, then the
-    # reference in what is left of its cluster.
-    if isinstance(found, NotFound) or found["reference"][0].status != OK:
-        try:
-            other = _in_turn(objects, ("workpiece", "reference"), report, **context)
-        except NotFound:
-            other = None
-        if other is not None and (isinstance(found, NotFound) or _rank(other) > _rank(found)):
-            found = other
+    with ThreadPoolExecutor(max_workers=1) as ahead:  # leaving it waits for a search ahead that was not needed
+        if blas_threads == 1:  # a second thread only with BLAS held to one (its own threads would spin)
+            _search_ahead(ahead, objects, **context)
+        found = _search_in_both_orders(objects, report, context)
     if isinstance(found, NotFound):
         raise found
     (workpiece_match, workpiece_idx, wp_touching, _), (reference_match, reference_idx, ref_touching, _) = (
@@ -183,6 +176,53 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
                    {role: found[role][3] for role in ("workpiece", "reference")}, spacing)
 
 
+def _search_in_both_orders(objects, report, context: dict):
+    """The models found in turn, reference first (see _in_turn), or NotFound."""
+    try:
+        found = _in_turn(objects, ("reference", "workpiece"), report, **context)
+    except NotFound as exc:
+        found = exc
+    # A reference not found, or not for sure, where objects may touch: the workpiece first, then the
+    # reference in what is left of its cluster.
+    if isinstance(found, NotFound) or found["reference"][0].status != OK:
+        try:
+            other = _in_turn(objects, ("workpiece", "reference"), report, **context)
+        except NotFound:
+            other = None
+        if other is not None and (isinstance(found, NotFound) or _rank(other) > _rank(found)):
+            found = other
+    return found
+
+
+def _search_ahead(pool: ThreadPoolExecutor, objects, scan, points, surfaces, platform, options, searched: dict, labels,
+                  **_) -> None:
+    """Start the workpiece's search of its likeliest cluster while the reference is looked for: the
+    workpiece is then looked for first in that cluster, unless the reference took it (two objects
+    apart, the usual scene: the two searches run at once).  The same search, by the same seed, as the
+    one _first_match would make (its result waits in ``searched``)."""
+    likeliest = {role: _candidates(points, objects, labels, surfaces[role])[:1] for role in ("reference", "workpiece")}
+    if not likeliest["workpiece"] or (likeliest["reference"]
+                                      and np.array_equal(likeliest["reference"][0][0], likeliest["workpiece"][0][0])):
+        return
+    members, larger = likeliest["workpiece"][0]
+    searched[("workpiece", members.tobytes())] = pool.submit(
+        _search, scan, points, members, larger, surfaces["workpiece"], options, "workpiece", _stands_on(platform,
+                                                                                                      surfaces["workpiece"]))
+
+
+def _stands_on(platform, surface: SurfaceModel):
+    """Whether a pose U of the model stands on the platform (does not sink through it)."""
+    return lambda U: not physics.sinks(platform, surface, U)
+
+
+def _search(scan: Cloud, points, members, larger: bool, surface: SurfaceModel, options: dict, role: str, stands):
+    """The model's search of one candidate cluster: in a cluster larger than the model, no pose
+    explains most of it, so searching again with other seeds cannot tell a better pose (see
+    match_trusted); the split in _first_match judges the one found."""
+    return match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
+                         stands, attempts=1 if larger else SEARCH_ATTEMPTS)
+
+
 def _unexplained(objects, labels, *regions) -> int:
     """How many points of the clusters (``labels`` of the ``objects``) the regions lie in belong to none of them."""
     taken = np.isin(objects, np.concatenate(regions))
@@ -204,7 +244,7 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
     for step, role in enumerate(order):
         surface = surfaces[role]
         report(0.1 + 0.2 * step, f"looking for the {role} {surface.name}")
-        stands = (lambda U, s=surface: not physics.sinks(platform, s, U))
+        stands = _stands_on(platform, surface)
         result, rejected, sunk, matched = _first_match(scan, points, left, labels, surface, options, role,
                                                        near_mm[role], stands, searched)
         if result is None:
@@ -217,7 +257,7 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
         found[role] = (result, left[region], on.touching, matched)
         left = left[~region]
         # Whole clusters taken leave the others as they were; a split one may fall apart.
-        labels = np.unique(labels[~region], return_inverse=True)[1].reshape(-1) if not on.touching and len(left) \
+        labels = _renumbered(labels[~region]) if not on.touching and len(left) \
             else _clusters(points[left], LINK_SPACINGS * spacing)
     return found
 
@@ -428,10 +468,24 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
     inverse = inverse.reshape(-1)
     counts = np.bincount(inverse, minlength=len(cells))
     centres = np.stack([np.bincount(inverse, points[:, k], len(cells)) for k in range(3)], axis=1) / counts[:, None]
-    pairs = cKDTree(centres).query_pairs(link, output_type="ndarray")
+    # An unbalanced tree builds in half the time and finds the same pairs (they only join components).
+    pairs = cKDTree(centres, balanced_tree=False, compact_nodes=False).query_pairs(link, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(cells), len(cells)))
     _, cell_labels = connected_components(graph, directed=False)
     return cell_labels[inverse]
+
+
+def _present(labels: np.ndarray) -> np.ndarray:
+    """The cluster labels that occur, in order (np.unique's answer, counted rather than sorted)."""
+    return np.flatnonzero(np.bincount(labels)) if len(labels) else np.empty(0, dtype=np.int64)
+
+
+def _renumbered(labels: np.ndarray) -> np.ndarray:
+    """The labels numbered 0, 1, ... in their order, as np.unique's inverse numbers them."""
+    present = _present(labels)
+    number = np.zeros(labels.max() + 1, dtype=np.int64)
+    number[present] = np.arange(len(present))
+    return number[labels]
 
 
 def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.ndarray, bool]]:
@@ -441,7 +495,7 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.nda
     if len(idx) == 0:
         return []
     alike, larger = [], []
-    for label in np.unique(labels):
+    for label in _present(labels):
         members = idx[labels == label]
         if len(members) < MIN_CLUSTER_POINTS:
             continue
@@ -468,13 +522,11 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
     fallback, rejected, sunk = (None, None), None, False
     for members, larger in _candidates(points, idx, labels, surface):
         matched = members
-        # In a cluster larger than the model, no pose explains most of it: searching again with other
-        # seeds cannot tell a better pose (see match_trusted); the split below judges the one found.
         key = (role, members.tobytes())
         if key not in searched:
-            searched[key] = match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface,
-                                          options, role, stands, attempts=1 if larger else SEARCH_ATTEMPTS)
-        result = copy.deepcopy(searched[key])
+            searched[key] = _search(scan, points, members, larger, surface, options, role, stands)
+        result = searched[key]
+        result = copy.deepcopy(result.result() if isinstance(result, Future) else result)
         if result.matrix is not None and not stands(result.matrix):
             sunk = True
             continue
