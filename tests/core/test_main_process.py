@@ -1,5 +1,6 @@
 """``python3 -m workcal_wb`` as a process: it ends without the interpreter's teardown (``__main__``),
 so what it prints must still arrive whole through a pipe, and its exit status must be main's."""
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +13,10 @@ PYTHON = sys.executable if Path(sys.executable).name.startswith("python") else "
 
 
 def _run(*args):
-    return subprocess.run([PYTHON, "-m", "workcal_wb", *args], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    # Buffered as a user's shell leaves it (PYTHONUNBUFFERED, set by some CI runners, would hide a lost buffer).
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    return subprocess.run([PYTHON, "-m", "workcal_wb", *args], cwd=ROOT, capture_output=True, text=True, timeout=60,
+                          env=env)
 
 
 def test_output_through_a_pipe_arrives_whole():
