@@ -51,12 +51,18 @@ class View:
         column = np.broadcast_to(column[:, None, None] + offsets[None, None, :], shape).reshape(-1)
         row = np.broadcast_to(row[:, None, None] + offsets[None, :, None], shape).reshape(-1)
         inside = (column >= 0) & (column < image.shape[1]) & (row >= 0) & (row < image.shape[0])
-        # One sort of (pixel, paint order) keys: the last key of each pixel is the point painted last.
-        order = np.flatnonzero(inside)
-        keys = np.sort((row[inside] * image.shape[1] + column[inside]) * len(row) + order)
-        pixel = keys // len(row)
-        last = np.append(pixel[1:] != pixel[:-1], True)
-        image.reshape(-1, 3)[pixel[last]] = colours[keys[last] % len(row) // (dot * dot)]
+        order = np.flatnonzero(inside)  # paint order: a dot's pixels in turn, the points in the order given
+        pixel = row[inside] * image.shape[1] + column[inside]
+        # The last dot painted on each pixel: one scatter, which numpy fills in order (15 ms less than
+        # a sort of 240k keys per view), checked, since numpy does not promise that order.
+        last = np.full(image.shape[0] * image.shape[1], -1, np.int64)
+        last[pixel] = order
+        if not (last[pixel] >= order).all():  # some other order: one sort of (pixel, paint order) keys
+            keys = np.sort(pixel * len(row) + order)
+            ends = np.append(keys[1:] // len(row) != keys[:-1] // len(row), True)
+            last[keys[ends] // len(row)] = keys[ends] % len(row)
+        painted = np.flatnonzero(last >= 0)
+        image.reshape(-1, 3)[painted] = colours[last[painted] // (dot * dot)]
 
     def scale_bar(self, image: np.ndarray, colour=(0, 0, 0)) -> float:
         """Draw a bar of a round length (1, 2 or 5 x 10^n mm, about a fifth of the width) at the lower
