@@ -268,3 +268,18 @@ def test_where_dots_overlap_the_point_painted_last_wins():
                     if 0 <= r + dr < expected.shape[0] and 0 <= c + dc < expected.shape[1]:
                         expected[r + dr, c + dc] = colour
         assert np.array_equal(image, expected), dot
+
+
+def test_the_last_painted_by_sort_agrees_with_painting_in_turn():
+    """``sorted_last_painted``, what ``last_painted`` falls back on should numpy ever scatter out of order."""
+    from workcal_wb.core.picture import last_painted, sorted_last_painted
+
+    rng = np.random.default_rng(4)
+    pixel = rng.integers(0, 50, 400)
+    order = np.sort(rng.choice(1000, 400, replace=False))
+    expected = np.full(60, -1)
+    for p, o in zip(pixel, order):
+        expected[p] = o
+    assert np.array_equal(sorted_last_painted(pixel, order, 60), expected)
+    assert np.array_equal(last_painted(pixel, order, 60), expected)
+    assert np.array_equal(sorted_last_painted(pixel[:0], order[:0], 60), np.full(60, -1))
