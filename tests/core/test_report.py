@@ -246,3 +246,40 @@ def test_the_scale_bar_is_a_round_length_under_a_fifth_of_the_width_at_any_scale
             length = view.scale_bar(image)
             assert 0.39 * target <= length <= target * (1 + 1e-12), (decade, target, length)
             assert np.isclose(length / 10.0 ** np.floor(np.log10(length) + 1e-9), [1, 2, 5]).any()
+
+
+def test_where_dots_overlap_the_point_painted_last_wins():
+    """``View.draw`` against painting dot after dot in a loop: many points on few pixels, dots of
+    one and two pixels, some off the image."""
+    from workcal_wb.core.picture import View, canvas
+
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-1, 11, (3000, 2))
+    colours = rng.integers(0, 256, (len(points), 3), dtype=np.uint8)
+    view = View(np.array([[0.0, 0.0], [10.0, 10.0]]), size=40, margin=2)
+    for dot in (1, 2):
+        image = canvas(view.width, view.height)
+        view.draw(image, points, colours, dot=dot)
+        expected = canvas(view.width, view.height)
+        column, row = view.pixels(points)
+        for c, r, colour in zip(column, row, colours):
+            for dr in np.arange(dot) - dot // 2:
+                for dc in np.arange(dot) - dot // 2:
+                    if 0 <= r + dr < expected.shape[0] and 0 <= c + dc < expected.shape[1]:
+                        expected[r + dr, c + dc] = colour
+        assert np.array_equal(image, expected), dot
+
+
+def test_the_last_painted_by_sort_agrees_with_painting_in_turn():
+    """``sorted_last_painted``, what ``last_painted`` falls back on should numpy ever scatter out of order."""
+    from workcal_wb.core.picture import last_painted, sorted_last_painted
+
+    rng = np.random.default_rng(4)
+    pixel = rng.integers(0, 50, 400)
+    order = np.sort(rng.choice(1000, 400, replace=False))
+    expected = np.full(60, -1)
+    for p, o in zip(pixel, order):
+        expected[p] = o
+    assert np.array_equal(sorted_last_painted(pixel, order, 60), expected)
+    assert np.array_equal(last_painted(pixel, order, 60), expected)
+    assert np.array_equal(sorted_last_painted(pixel[:0], order[:0], 60), np.full(60, -1))

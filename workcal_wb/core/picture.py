@@ -51,12 +51,10 @@ class View:
         column = np.broadcast_to(column[:, None, None] + offsets[None, None, :], shape).reshape(-1)
         row = np.broadcast_to(row[:, None, None] + offsets[None, :, None], shape).reshape(-1)
         inside = (column >= 0) & (column < image.shape[1]) & (row >= 0) & (row < image.shape[0])
-        # One sort of (pixel, paint order) keys: the last key of each pixel is the point painted last.
-        order = np.flatnonzero(inside)
-        keys = np.sort((row[inside] * image.shape[1] + column[inside]) * len(row) + order)
-        pixel = keys // len(row)
-        last = np.append(pixel[1:] != pixel[:-1], True)
-        image.reshape(-1, 3)[pixel[last]] = colours[keys[last] % len(row) // (dot * dot)]
+        order = np.flatnonzero(inside)  # paint order: a dot's pixels in turn, the points in the order given
+        last = last_painted(row[inside] * image.shape[1] + column[inside], order, image.shape[0] * image.shape[1])
+        painted = np.flatnonzero(last >= 0)
+        image.reshape(-1, 3)[painted] = colours[last[painted] // (dot * dot)]
 
     def scale_bar(self, image: np.ndarray, colour=(0, 0, 0)) -> float:
         """Draw a bar of a round length (1, 2 or 5 x 10^n mm, about a fifth of the width) at the lower
@@ -71,6 +69,29 @@ class View:
         image[row - 4:row + 1, self.margin] = colour
         image[row - 4:row + 1, self.margin + pixels - 1] = colour
         return float(length)
+
+
+def last_painted(pixel: np.ndarray, order: np.ndarray, size: int) -> np.ndarray:
+    """For each of ``size`` pixels, the largest ``order`` painted on it (-1: none), ``order`` rising.
+
+    One scatter, which numpy fills in order (15 ms less than a sort of a view's 240k dots), checked,
+    since numpy does not promise that order; if it did not hold, one sort of (pixel, order) keys."""
+    last = np.full(size, -1, np.int64)
+    last[pixel] = order
+    if (last[pixel] >= order).all():
+        return last
+    return sorted_last_painted(pixel, order, size)
+
+
+def sorted_last_painted(pixel: np.ndarray, order: np.ndarray, size: int) -> np.ndarray:
+    """``last_painted`` by one sort of (pixel, order) keys: the last key of each pixel is the last painted."""
+    last = np.full(size, -1, np.int64)
+    if len(order):
+        span = int(order.max()) + 1
+        keys = np.sort(pixel * span + order)
+        ends = np.append(keys[1:] // span != keys[:-1] // span, True)
+        last[keys[ends] // span] = keys[ends] % span
+    return last
 
 
 def frame(image: np.ndarray, colour=(200, 200, 200)) -> None:
