@@ -9,7 +9,10 @@ DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matp
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
                  WORKCAL_REQUIRE_PYE57=1
-XVFB          := xvfb-run -a -s "-screen 0 1280x1024x24"
+# The first X display number tried: the other-Debian chroot shares the network namespace (X's abstract
+# sockets) but not /tmp (its lock files), so it starts elsewhere and both suites can run at once.
+XVFB_DISPLAY  ?= 99
+XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 # -rfEs: each failure, error and skip named (with why) in the CI log; --durations: the slowest tests, the first to trim (CI must stay well under 30 min).
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
