@@ -244,3 +244,44 @@ def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
     assert result.status == "ambiguous", result.reasons
     assert any("clearly different pose" in r or "other side" in r for r in result.reasons), result.reasons
 
+
+
+def _thin_mesh_judge():
+    """A Judge on a thin cylinder mesh with a flat face (a segment 4 mm out from a corner: no sample
+    lies on it) and scan points from on the surface to 30 mm off it, and its saturation distance."""
+    from workcal_wb.core.match import EVIDENCE_SIGMAS, FAR_OFF_SIGMAS, Judge, MatchOptions
+
+    tube = shapes.cylinder(radius=5.0, height=200.0, edge_mm=4.0)
+    corner = tube.points[0]
+    tip = corner + 4.0 * (corner - tube.points.mean(axis=0)) / np.linalg.norm(corner - tube.points.mean(axis=0))
+    points = np.vstack([tube.points, tip, (corner + tip) / 2])
+    flat = [[0, len(points) - 1, len(points) - 2]]
+    surface = SurfaceModel(Cloud(points, triangles=np.vstack([tube.triangles, flat]), name="tube"))
+    rng = np.random.default_rng(0)
+    near = surface.points[rng.choice(len(surface.points), 1500)] + rng.normal(size=(1500, 3)) * rng.uniform(0, 10, (1500, 1))
+    by_tip = tip + rng.normal(size=(100, 3)) * 0.5
+    sample = np.vstack([near, by_tip])
+    judge = Judge(sample, surface, (sample[:50], np.full(50, 0.05)), 1.0, MatchOptions(), [])
+    judge.gate = 0.3
+    return judge, surface, sample, FAR_OFF_SIGMAS * judge.gate / EVIDENCE_SIGMAS
+
+
+def test_far_off_distances_are_exact_wherever_they_can_weigh_less_than_fully():
+    judge, surface, sample, saturated = _thin_mesh_judge()
+    exact = surface.exact_distance(sample)
+    distances = judge._distances(np.eye(4))
+    within = exact < saturated
+    assert within.sum() > 300 and (~within).sum() > 300, "points on both sides of the saturation distance"
+    assert np.array_equal(distances[within], exact[within]), "a point that weighs less than fully got no exact distance"
+    assert np.all((distances[~within] == exact[~within]) | np.isposinf(distances[~within]))
+
+
+def test_far_off_distances_ask_no_exact_query_for_a_pose_far_from_the_mesh():
+    judge, surface, sample, _ = _thin_mesh_judge()
+    asked = []
+    exact = surface.exact_distance
+    surface.__dict__["exact_distance"] = lambda points: asked.append(len(points)) or exact(points)
+    far = np.eye(4)
+    far[:3, 3] = (0.0, 0.0, 500.0)
+    assert np.isposinf(judge._distances(far)).all()
+    assert sum(asked) == 0, f"{sum(asked)} exact queries for points hundreds of mm off the mesh"
