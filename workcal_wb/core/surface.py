@@ -35,8 +35,11 @@ _UNKNOWN, _FAR = 0, -1
 # A grid keeps its cells in bricks of BRICK = 2^BRICK_BITS cells a side (BRICK^3 x 4 bytes each).
 BRICK_BITS = 2
 BRICK = 1 << BRICK_BITS
-# Cells filled by one KD-tree query at most (bounds the temporary memory of a fill).
-FILL_CHUNK = 1 << 18
+# Cells filled by one KD-tree query at most (bounds the temporary memory of a fill: ~100 bytes a cell).
+FILL_CHUNK = 1 << 15
+# precompute scans the grid in slabs of about this many cells (a slab's near cells' keys and values
+# live at once).
+NEAR_SLAB_CELLS = 1 << 18
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
 # level doubles both, so a loose gate does not fill a fine grid far from the surface.
 GATE_CELLS = 16
@@ -161,13 +164,18 @@ class NearestGrid:
 
     def _fill(self, keys: np.ndarray) -> None:
         keys = np.unique(keys)
-        tree = self._tree()
+        self._store(keys, self._queried(keys))
+        self.filled += len(keys)
+
+    def _queried(self, keys: np.ndarray) -> np.ndarray:
+        """What each cell holds once filled: its centre's nearest sample within the bound (index + 1), else "none"."""
+        tree, values = self._tree(), np.empty(len(keys), np.int32)
         for start in range(0, len(keys), FILL_CHUNK):
             part = keys[start:start + FILL_CHUNK]
             d, j = tree.query(self.centres(part), distance_upper_bound=self.bound,
                               workers=-1 if len(part) > 10000 else 1)
-            self._store(part, np.where(np.isfinite(d), j + 1, _FAR).astype(np.int32))
-        self.filled += len(keys)
+            values[start:start + FILL_CHUNK] = np.where(np.isfinite(d), j + 1, _FAR)
+        return values
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Sample index per point, -1 where no sample lies within the bound of its cell."""
@@ -193,31 +201,70 @@ class NearestGrid:
             return int(np.count_nonzero(self._rows[2:self._used]))
 
     def precompute(self) -> None:
-        """Fill every cell now: those within the bound of a sample by query, the rest as "none"."""
+        """Fill every cell now: those within the bound of a sample by query, the rest as "none".
+
+        The grid is scanned twice a slab at a time (a slab's near mask lives at once, not a mask of the
+        whole grid).  The first pass counts the bricks that may hold a sample: their rows are allocated
+        once and left untouched, so not resident, until used (grown on demand, up to half again too
+        many rows were zeroed, and a reallocation may copy them).  The second queries each slab's near
+        cells and stores only the bricks where some cell has a sample: about a third of the near
+        cube's bricks hold "none" throughout, as the bricks never stored do; what stays unused of the
+        rows is handed back."""
         with self._lock:
             if self.complete:
                 return
-            occupied = np.zeros(tuple(self.dims), bool)
-            c = np.floor((self._tree().data - self.lo) / self.cell).astype(np.int64)
-            occupied[c[:, 0], c[:, 1], c[:, 2]] = True
-            from scipy.ndimage import binary_dilation
-
-            near = binary_dilation(occupied, structure=np.ones((3, 3, 3), bool),  # diagonal steps too
-                                   iterations=int(np.ceil(self.bound / self.cell)) + 1)
-            del occupied
-            # A slab of bricks at a time: the near cells' indices of a whole grid are tens of MB.
-            step = BRICK * max(1, FILL_CHUNK // (BRICK * int(self.dims[1]) * int(self.dims[2])))
-            for start in range(0, int(self.dims[0]), step):
-                ijk = np.argwhere(near[start:start + step])
+            near_bricks = np.zeros(tuple(self.bricks), bool)
+            for start, near in self._near_slabs():
+                padded = np.pad(near, [(0, -n % BRICK) for n in near.shape])
+                b0, b1, b2 = (n // BRICK for n in padded.shape)
+                near_bricks[start // BRICK:start // BRICK + b0] = padded.reshape(
+                    b0, BRICK, b1, BRICK, b2, BRICK).any(axis=(1, 3, 5))
+            room = self._used + int(np.count_nonzero(self._brick_row[near_bricks.ravel()] == 0))
+            del near_bricks
+            if room > len(self._rows):
+                rows, row_brick = np.empty((room, BRICK**3), np.int32), np.full(room, -1, np.int64)
+                rows[:self._used], row_brick[:self._used] = self._rows[:self._used], self._row_brick[:self._used]
+                self._rows, self._row_brick = rows, row_brick
+            for start, near in self._near_slabs():
+                ijk = np.column_stack(np.unravel_index(np.flatnonzero(near), near.shape))
                 ijk[:, 0] += start
                 keys = self._keys(ijk)
-                self._fill(keys[self.stored(keys) == _UNKNOWN])
-            del near
+                del ijk
+                keys = keys[self.stored(keys) == _UNKNOWN]
+                values = self._queried(keys)
+                brick = keys >> 3 * BRICK_BITS
+                kept = np.isin(brick, brick[values > 0])  # a slab holds whole bricks
+                self._store(keys[kept], values[kept])
+                self.filled += len(keys)
             # Every near cell is filled now: what is still unknown is far from the model.
             rows = self._rows[2:self._used]
             rows[rows == _UNKNOWN] = _FAR
             self._brick_row[self._brick_row == 0] = 1
+            self._rows.resize((self._used, BRICK**3), refcheck=False)
+            self._row_brick.resize(self._used, refcheck=False)
             self.complete = True
+
+    def _near_slabs(self):
+        """(first x index, near mask) for the grid's slabs of BRICK-aligned x layers in turn.  A cell is
+        near when a sample's cell lies within ``reach`` cells of it along every axis: the cube that
+        repeated 3x3x3 dilation reaches (diagonal steps too), as three separable 1D maximum filters,
+        each slab filtered with ``reach`` layers of halo so it sees the samples beside it."""
+        from scipy.ndimage import maximum_filter1d
+
+        reach = int(np.ceil(self.bound / self.cell)) + 1
+        cells = np.floor((self._tree().data - self.lo) / self.cell).astype(np.int64)
+        cells = cells[np.argsort(cells[:, 0], kind="stable")]
+        layers, plane = int(self.dims[0]), (int(self.dims[1]), int(self.dims[2]))
+        step = BRICK * max(1, NEAR_SLAB_CELLS // (BRICK * plane[0] * plane[1]))
+        for start in range(0, layers, step):
+            stop = min(start + step, layers)
+            lo, hi = max(start - reach, 0), min(stop + reach, layers)
+            first, last = np.searchsorted(cells[:, 0], [lo, hi])
+            slab = np.zeros((hi - lo,) + plane, np.uint8)
+            slab[cells[first:last, 0] - lo, cells[first:last, 1], cells[first:last, 2]] = 1
+            for axis in (1, 2, 0):
+                slab = maximum_filter1d(slab, 2 * reach + 1, axis=axis, mode="constant", cval=0)
+            yield start, slab[start - lo:stop - lo].view(bool)
 
     def state(self) -> dict:
         """The grid as plain arrays (its geometry and the cells filled so far in the stored bricks), for
