@@ -245,7 +245,6 @@ def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
     assert any("clearly different pose" in r or "other side" in r for r in result.reasons), result.reasons
 
 
-
 def _thin_mesh_judge():
     """A Judge on a thin cylinder mesh with a flat face (a segment 4 mm out from a corner: no sample
     lies on it) and scan points from on the surface to 30 mm off it, and its saturation distance."""
