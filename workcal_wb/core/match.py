@@ -28,7 +28,6 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from functools import cached_property
 from statistics import NormalDist
 
 import numpy as np
@@ -664,25 +663,20 @@ class Judge:
         key = (np.asarray(T, float).tobytes(), self.gate)
         if key not in self._distance_cache:
             moved = frames.apply(T, self.all_points)
+            saturated = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS  # far_off_test weighs farther points fully
             if self.surface.is_mesh:
-                # Exact only where it can weigh less than fully (far_off_test saturates at FAR_OFF_SIGMAS
-                # scales): a mesh point within that is within it plus the samples' cover of a sample, and
-                # an exact query far from a thin or round mesh visits most of its BVH (seconds per pose).
-                saturated = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS
-                found = self.surface.nearest(moved, saturated + self._sample_cover)[2]
+                # Exact only where it can weigh less than fully: a mesh point within that is within it
+                # plus the samples' cover of a sample, and an exact query far from a thin or round mesh
+                # visits most of its BVH (seconds per pose).
+                found = self.surface.nearest(moved, saturated + self.surface.sample_cover)[2]
                 distances = np.full(len(moved), np.inf)
                 distances[found] = self.surface.exact_distance(moved[found])
             else:
-                reach = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS + self.surface.spacing
-                d, idx, found = self.surface.nearest_cell(moved, reach)
+                d, idx, found = self.surface.nearest_cell(moved, saturated + self.surface.spacing)
                 plane = np.abs(self.surface.plane_residuals(moved, idx))
                 distances = np.where(found, np.maximum(plane, d - self.surface.spacing), np.inf)
             self._distance_cache[key] = distances
         return self._distance_cache[key]
-
-    @cached_property
-    def _sample_cover(self) -> float:
-        return _sample_cover(self.surface)
 
     def _from_the_other_side(self, best: np.ndarray, rival: np.ndarray) -> bool:
         """Whether the rival, seen from the side of the part its own matched surface faces, would
@@ -802,21 +796,6 @@ class Judge:
                     "note": "the matched surface faces every way (views merged into one cloud?): poses weighed by "
                             "the scan points on the model, without visibility"}
         return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
-
-
-def _sample_cover(surface: SurfaceModel) -> float:
-    """How far (mm) a point of the mesh can lie from its nearest sample, at most: every face with an
-    area has a sample at its centroid (pointops.sample_triangles), so its points lie within its
-    farthest corner's distance of that; a face without one is a segment, each point of which lies
-    within half its length of an end, and that end within its own nearest sample's distance of one."""
-    corners = surface.vertices[surface.triangles]  # faces x 3 corners x 3
-    flat = pointops.triangle_normals_and_areas(surface.vertices, surface.triangles)[1] <= 0
-    cover = np.linalg.norm(corners - corners.mean(axis=1, keepdims=True), axis=2).max(axis=1)
-    if flat.any():
-        ends = surface.tree.query(corners[flat].reshape(-1, 3))[0].reshape(-1, 3).max(axis=1)
-        lengths = np.linalg.norm(corners[flat] - np.roll(corners[flat], 1, axis=1), axis=2).max(axis=1)
-        cover[flat] = lengths / 2 + ends
-    return float(cover.max(initial=0.0))
 
 
 def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:

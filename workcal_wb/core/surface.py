@@ -594,6 +594,22 @@ class SurfaceModel:
         return answer["points"].astype(float) + self._bvh[2], normals
 
     @cached_property
+    def sample_cover(self) -> float:
+        """How far (mm) a point of the mesh can lie from its nearest sample, at most: every face with an
+        area has a sample at its centroid (pointops.sample_triangles), so its points lie within its
+        farthest corner's distance of that; a face without one is a segment, each point of which lies
+        within half its length of an end, and that end within its own nearest sample's distance of one.
+        Meshes only; computed once per model (each match's far-off test asks for it)."""
+        corners = self.vertices[self.triangles]  # faces x 3 corners x 3
+        flat = pointops.triangle_normals_and_areas(self.vertices, self.triangles)[1] <= 0
+        cover = np.linalg.norm(corners - corners.mean(axis=1, keepdims=True), axis=2).max(axis=1)
+        if flat.any():
+            ends = self.tree.query(corners[flat].reshape(-1, 3))[0].reshape(-1, 3).max(axis=1)
+            lengths = np.linalg.norm(corners[flat] - np.roll(corners[flat], 1, axis=1), axis=2).max(axis=1)
+            cover[flat] = lengths / 2 + ends
+        return float(cover.max(initial=0.0))
+
+    @cached_property
     def exact_distance(self):
         """Exact unsigned point-to-mesh distance function (open3d BVH), or None for point models."""
         if not self.is_mesh:
