@@ -191,6 +191,23 @@ def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
     assert np.array_equal(seen.sensors, [[10.0, 20.0, 30.0]]) and len(seen) < 60000
 
 
+def test_a_large_scan_whose_normals_are_nan_is_thinned_not_emptied(tmp_path):
+    """Points with good coordinates but NaN normals are kept while thinning; the normals are dropped."""
+    from workcal_wb.core import readers
+
+    u, v = np.random.default_rng(4).random((2, 12000)) * 100
+    rows = np.zeros(len(u), [(name, "<f4") for name in ("x", "y", "z", "nx", "ny", "nz")])
+    rows["x"], rows["y"], rows["z"] = u, v, 5 * np.sin(u / 10)
+    rows["nx"] = rows["ny"] = rows["nz"] = np.nan
+    header = "ply\nformat binary_little_endian 1.0\nelement vertex 12000\n" + "".join(
+        f"property float {name}\n" for name in rows.dtype.names) + "end_header\n"
+    (tmp_path / "nan.ply").write_bytes(header.encode() + rows.tobytes())
+    thinned = readers.read_cloud(tmp_path / "nan.ply", max_points=10000)
+    assert 1000 < len(thinned) <= 5000 and thinned.normals is None
+    assert any("points have NaN or infinite normals" in w for w in thinned.warnings), thinned.warnings
+    assert not any("coordinates" in w for w in thinned.warnings), thinned.warnings
+
+
 def test_thinning_while_reading_does_not_depend_on_the_chunk_size(tmp_path):
     """Read in chunks of a few hundred records or in one, a large scan thins to the very same points
     (the first of each voxel of one grid over the whole file), with non-finite points and a stray point

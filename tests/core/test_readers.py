@@ -252,6 +252,26 @@ def test_text_columns_that_are_not_named_or_not_unit_are_no_normals(tmp_path):
     assert cloud.normals is None and any("not unit vectors" in w for w in cloud.warnings)
 
 
+@pytest.mark.parametrize("bad", [[1], [0, 1, 2, 3]])
+def test_nan_normals_on_good_points_drop_the_normals_not_the_points(tmp_path, bad):
+    normals = np.array(NORMALS)
+    normals[bad] = np.nan
+    rows = [(*p, *n) for p, n in zip(POINTS, normals)]
+    cloud = read_cloud(write(tmp_path, "scan.xyz", "x y z nx ny nz\n" + rows_text(rows)))
+    np.testing.assert_array_equal(cloud.points, POINTS)
+    assert cloud.normals is None
+    assert any(w.startswith("scan.xyz: ") and f"{len(bad)} points have NaN or infinite normals" in w
+               for w in cloud.warnings), cloud.warnings
+
+
+def test_nan_normals_of_nan_points_keep_the_other_normals(tmp_path):
+    rows = [(*p, *n) for p, n in zip(POINTS, NORMALS)] + [(np.nan,) * 6]
+    cloud = read_cloud(write(tmp_path, "scan.xyz", "x y z nx ny nz\n" + rows_text(rows)))
+    np.testing.assert_array_equal(cloud.points, POINTS)
+    np.testing.assert_array_equal(cloud.normals, NORMALS)
+    assert not any("normals" in w for w in cloud.warnings), cloud.warnings
+
+
 # --- meshes -----------------------------------------------------------------------------------
 
 TETRA = np.array([(0, 0, 0), (10, 0, 0), (0, 10, 0), (0, 0, 10)], dtype=float)

@@ -91,9 +91,14 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
     if len(pts) == 0:
         raise InputError(f"{cloud.name}: contains no points")
     finite = _within(pts, MAX_COORDINATE_MM)  # False for NaN too
-    if cloud.normals is not None:
-        finite &= _within(cloud.normals, np.inf)
     warnings = list(cloud.warnings)
+    normals = cloud.normals
+    if normals is not None:
+        unusable = finite & ~_within(normals, np.inf)
+        if unusable.any():  # a normal the scanner could not estimate says nothing against its point
+            warnings.append(f"{cloud.name}: {int(unusable.sum())} points have NaN or infinite normals: the "
+                            "file's normals were not used")
+            normals = None
     if cloud.is_mesh:
         if not finite.all():
             raise InputError(f"{cloud.name}: {int((~finite).sum())} mesh vertices are NaN or infinite (or beyond "
@@ -111,7 +116,7 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
         if (collapsed | repeated).all():  # its vertices alone are no model of its surface
             raise InputError(f"{cloud.name}: none of its {len(collapsed)} faces covers any area (each has two "
                              "corners at one point)")
-        return _verified(Cloud(pts, cloud.normals, cloud.triangles[~(collapsed | repeated)], cloud.name, warnings,
+        return _verified(Cloud(pts, normals, cloud.triangles[~(collapsed | repeated)], cloud.name, warnings,
                                cloud.sensors, cloud.sensor_of))
     keep = np.flatnonzero(finite)
     if len(keep) < len(pts):
@@ -127,10 +132,9 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
     if len(keep) < min_points:
         raise InputError(f"{cloud.name}: only {len(keep)} usable points, at least {min_points} needed")
     if len(keep) == len(pts):
-        return _verified(Cloud(pts, cloud.normals, None, cloud.name, warnings, cloud.sensors, cloud.sensor_of))
-    normals = None if cloud.normals is None else cloud.normals[keep]
-    return _verified(Cloud(pts[keep], normals, None, cloud.name, warnings, cloud.sensors,
-                           None if cloud.sensor_of is None else cloud.sensor_of[keep]))
+        return _verified(Cloud(pts, normals, None, cloud.name, warnings, cloud.sensors, cloud.sensor_of))
+    return _verified(Cloud(pts[keep], None if normals is None else normals[keep], None, cloud.name, warnings,
+                           cloud.sensors, None if cloud.sensor_of is None else cloud.sensor_of[keep]))
 
 
 def _collapsed_faces(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:

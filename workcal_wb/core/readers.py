@@ -871,7 +871,7 @@ class _Thinning:
         self.dropped = 0  # non-finite points
 
     def add(self, values: np.ndarray, start: int) -> None:
-        finite = np.isfinite(values).all(axis=1)
+        finite = np.isfinite(values[:, :3]).all(axis=1)  # a bad normal is for checked() to judge
         self.dropped += len(values) - int(finite.sum())
         values, index = values[finite], start + np.flatnonzero(finite)
         if self.grid is None:  # kept whole until GRID_SAMPLE finite points (or the file's end) size the grid
