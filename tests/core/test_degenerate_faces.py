@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.writers import write_ply
@@ -122,3 +123,23 @@ def test_a_mesh_whose_faces_all_cover_nothing_is_refused_naming_the_file(tmp_pat
                     + "3 0 0 1\n3 2 2 2\n3 1 3 1\n")
     with pytest.raises(InputError, match=r"flat.off: none of its 3 faces covers any area"):
         SurfaceModel(read_cloud(path))
+
+
+def test_vertices_no_face_uses_are_dropped_with_a_warning():
+    """A stray vertex (a modeller's leftover) set a mesh model's size, so its sample spacing and the
+    origin of its float32 distances, and its shape: a flat square with one passed as a solid."""
+    from workcal_wb.core.errors import InputError
+    from workcal_wb.core.surface import SurfaceModel
+
+    square = np.array([[0, 0, 0], [100, 0, 0], [100, 100, 0], [0, 100, 0], [0, 0, 100]], float)
+    with pytest.raises(InputError, match="square.stl: the model is planar"):
+        SurfaceModel(Cloud(square, triangles=np.array([(0, 1, 2), (0, 2, 3)]), name="square.stl"))
+    box = SurfaceModel(Cloud(CORNERS, triangles=np.array(FACES), name="box.ply"))
+    faces = np.array(FACES)
+    stray = SurfaceModel(Cloud(np.vstack([CORNERS[:4], [1e5, 0, 0], CORNERS[4:]]),
+                               triangles=np.where(faces >= 4, faces + 1, faces), name="box.ply"))
+    assert stray.diagonal == box.diagonal and stray.spacing == box.spacing
+    np.testing.assert_array_equal(stray.points, box.points)
+    np.testing.assert_array_equal(stray.exact_distance(np.array(QUERIES, float)),
+                                  box.exact_distance(np.array(QUERIES, float)))
+    assert any(w == "box.ply: ignored 1 vertex that no face uses" for w in stray.warnings), stray.warnings

@@ -313,6 +313,19 @@ class _SampleTree:
         return {"points": self.points, "_built": None}  # a copy builds its own tree when it needs one
 
 
+def _faces_vertices_only(mesh: Cloud) -> Cloud:
+    """``mesh`` without the vertices no face uses, with a warning: a stray vertex would set the model's
+    size (its sample spacing), its shape and the origin its float32 distances are taken about."""
+    used = np.zeros(len(mesh.points), bool)
+    used[mesh.triangles.ravel()] = True
+    unused = len(used) - int(used.sum())
+    if not unused:
+        return mesh
+    warning = f"{mesh.name}: ignored {unused} {'vertex' if unused == 1 else 'vertices'} that no face uses"
+    return checked(Cloud(mesh.points[used], None if mesh.normals is None else mesh.normals[used],
+                         (np.cumsum(used) - 1)[mesh.triangles], mesh.name, [*mesh.warnings, warning]))
+
+
 class SurfaceModel:
     """Samples (mm) with unit outward normals and a KD-tree, the model's symmetries; coarse features
     cached per voxel size.
@@ -323,6 +336,8 @@ class SurfaceModel:
 
     def __init__(self, model: Cloud, seed: int = 0, symmetry_tolerance_mm: float | None = None):
         model = checked(model, 3)  # the readers' promises, also for a cloud made in code
+        if model.is_mesh:
+            model = _faces_vertices_only(model)
         if len(model) < 3 or shape_kind(model.points) != "solid":
             kind = "too small" if len(model) < 3 else shape_kind(model.points)
             raise InputError(f"{model.name}: the model is {kind}; a pose cannot be fitted to it")
