@@ -1,6 +1,7 @@
 """A mesh face with two corners at one point (a repeated index, or two vertices written at the same
 place) made open3d's distance query abort the process (an Eigen assertion): inside FreeCAD that is
-FreeCAD gone.  Such faces cover nothing, so they are dropped with a warning."""
+FreeCAD gone.  Such faces cover nothing, so they are dropped with a warning, as are vertices no face
+uses."""
 import json
 import subprocess
 import sys
