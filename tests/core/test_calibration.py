@@ -217,6 +217,25 @@ def test_wrong_reference_model_is_named(plain):
     assert_not_found(calibrate(scan.cloud(), scene.workpiece_model(), wrong), "reference object ellipsoid.stl: not found")
 
 
+def test_wrong_model_fails_without_polishing_poses_that_cannot_fit(plain, monkeypatch):
+    """The wrong model matched on a region (an ellipsoid on the block's points) fails and says why, and
+    the poses it is tried in, which miss the scan by many times the verdict's limit, are neither slid
+    home nor taken to the exact surface: no polish can bring them within it (the wrong reference
+    model took minutes to be named when every such pose was polished like a right one)."""
+    scene, scan = plain
+    wrong = shapes.ellipsoid().transformed(scene.reference.pose)
+    block = scan.points[scan.mask("reference")]
+    calls = {"refine": 0, "refine_exact": 0}
+    for name in calls:
+        def counted(*args, _name=name, _original=getattr(match_module, name), **kwargs):
+            calls[_name] += 1
+            return _original(*args, **kwargs)
+        monkeypatch.setattr(match_module, name, counted)
+    result = match_module.match(Cloud(block[::2], name="block"), wrong)
+    assert result.status == "failed" and any("does not fit the scan" in r for r in result.reasons), result.reasons
+    assert calls["refine_exact"] == 0 and calls["refine"] <= 60, calls
+
+
 def test_workpiece_missing_is_named(plain):
     scene, scan = plain
     without = Cloud(scan.points[~scan.mask("workpiece")], name="empty platform")

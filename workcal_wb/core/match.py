@@ -19,7 +19,9 @@ The verdict's best has its near-symmetric turns tried again, each refined exactl
 (_turns_refined_like): one of them is the right pose when the search handed over a flip, and only
 such a turn, as converged as the best and with both fitting within FAR_OFF_FIT noises, is no rival
 when it leaves significantly more points far off (or takes the best's place when it leaves
-significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home); a
+significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home),
+unless it misses the scan by more than HOPELESS_FIT times the verdict's limit (nor is such a pose
+taken to the exact surface: a wrong model's poses are all such, and are failed in seconds); a
 model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
 symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
@@ -127,6 +129,13 @@ FAR_OFF_FIT = 2.0
 # is refined again from these shifts (mm RMS over its matched points) either way along each motion
 # of its fit, and the best of those replaces it when its residual scale is at most HOME_GAIN times its own.
 HOME_SHIFTS_MM, HOME_GAIN = (2.0, 3.0), 0.5
+# A pose whose residual scale is more than this many times the verdict's limit (MAX_NOISE_RATIO noises
+# plus the tolerance) is no slide and no edge's width from fitting: it is neither slid home nor taken
+# to the exact surface (each costs about a second on a mesh).  Right poses measured under 1x (real and
+# simulated scans; a curved tile slid home from 4 noises, about 1.3x); a wrong model's poses 2.4-3x
+# after the search's refinement and 8-12x once widened.  A hopeless pose is still widened, and its
+# turns refined: that is how a flip handed over by the search (3-4x) comes home.
+HOPELESS_FIT = 2.0
 # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
 # samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
 PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
@@ -208,6 +217,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     # medium subset is sparser than the scan by the square root of their sizes (a surface).
     spacing = patch / 2 * np.sqrt(len(medium) / len(scan))
     voxel = options.coarse_voxel_mm or max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
+    fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
+    hopeless = HOPELESS_FIT * fit_limit
     if init is None:
         with timer("global search"):
             starts = _global_candidates(scan.points, surface, voxel, options, rng, min_voxel=1.5 * spacing)
@@ -220,7 +231,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         gate = voxel  # a guess may be off by a few millimetres
 
     with timer("refine"):
-        best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm)
+        best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless)
     sample = fine[:VERDICT_POINTS]
 
     def judged(best, rivals):
@@ -229,7 +240,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                       options, [])
 
         def polish(state):
-            return _polish(state, fine, surface, options.tolerance_mm)
+            return _polish(state, fine, surface, options.tolerance_mm, hopeless)
 
         def widen(state):
             return _widened(state, medium, surface)
@@ -237,12 +248,11 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         return (judge, *judge.rank(best, rivals, polish, widen,
                                    lambda state: _through_the_wall(state, medium, surface, gate),
                                    lambda state: _turns_refined_like(state, medium, fine, surface, gate,
-                                                                     options.tolerance_mm),
-                                   lambda state, noise: _slid_home(state, medium, surface, noise, polish)))
+                                                                     options.tolerance_mm, hopeless),
+                                   lambda state, noise: _slid_home(state, medium, surface, noise, polish, hopeless)))
 
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
-    fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
     if init is None and not chosen.sigma <= fit_limit and judge.scan_noise <= options.tolerance_mm:
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
         # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
@@ -255,7 +265,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
             again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
             if again:
                 retried, retried_rivals = _refine(options.method, again, medium, fine, surface, gate,
-                                                  options.tolerance_mm)
+                                                  options.tolerance_mm, hopeless)
                 first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
         if again and second > first:
             with timer("verdict"):
@@ -358,14 +368,14 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
 
 
 def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-            tolerance: float):
+            tolerance: float, hopeless: float = np.inf):
     """The best pose refined on all the fine points, and the distinct rivals refined on the medium
     ones (RefineStates, scan -> model).
 
     Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
     and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
     can tie with the right one, but only the right one brings the residuals down to the noise.
-    The model's near-symmetric turns of the winner are tried as rivals too.
+    The model's near-symmetric turns of the winner are tried as rivals too.  ``hopeless``: see _polish.
     """
     contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
     if len(contenders) == 1 and method != "robust":
@@ -376,7 +386,7 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
         order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
         contenders, states = [contenders[i] for i in order], [states[i] for i in order]
     if method == "robust":
-        best = _polish(states[0], fine, surface, tolerance)
+        best = _polish(states[0], fine, surface, tolerance, hopeless)
     else:
         from .paper_methods import refine_paper
 
@@ -388,26 +398,32 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
     return best, [poses[i] for i in keep[1:]]
 
 
-def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
+def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float, hopeless: float = np.inf):
     """A pose refined on the medium points, finished on all the fine ones.  When the robust fit
     leaves a motion nearly free against a mesh, it goes on against the exact surface and centres the
-    pose between the edges that pin the motion (see edges)."""
+    pose between the edges that pin the motion (see edges), unless its residual scale is above
+    ``hopeless`` (HOPELESS_FIT: sub-spacing slack is no matter for a pose that misses the scan)."""
     best = refine(fine, surface, state.T, state.gate, state.scale, POLISH_ITERATIONS)
     best.iterations += state.iterations
-    if surface.is_mesh and has_weak_motion(fine, surface, best.T, best.gate, best.scale):
+    if (surface.is_mesh and best.sigma <= hopeless
+            and has_weak_motion(fine, surface, best.T, best.gate, best.scale)):
         best = refine_exact(fine, surface, best)
         best.T, best.stability = centre_on_edges(fine, surface, best.T, best.gate, best.sigma, tolerance)
     return best
 
 
-def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, tolerance: float):
+def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, tolerance: float,
+                 hopeless: float = np.inf):
     """A pose refined on the ``medium`` points (a RefineState, scan -> model), finished as a match
     finishes its best: polished on all the ``fine`` points, refined again from a wider gate
     (_widened: a fit can stop an edge's width off) and polished again when that moved it.  A turn
-    of the best (_turns_refined_like) and a bootstrap refit (calibration) are finished this way."""
-    best = _polish(state, fine, surface, tolerance)
+    of the best (_turns_refined_like) and a bootstrap refit (calibration) are finished this way.
+    ``hopeless``: see _polish."""
+    best = _polish(state, fine, surface, tolerance, hopeless)
     wide = _widened(best, medium, surface)
-    return _polish(wide, fine, surface, tolerance) if _moved(wide.T, best.T, medium.mean(axis=0), best.gate) else best
+    if _moved(wide.T, best.T, medium.mean(axis=0), best.gate):
+        return _polish(wide, fine, surface, tolerance, hopeless)
+    return best
 
 
 def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
@@ -435,7 +451,7 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
 
 
 def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-                        tolerance: float) -> list:
+                        tolerance: float, hopeless: float = np.inf) -> list:
     """The best pose's near-symmetric turns, each refined to convergence exactly as the best was
     (refine_given: polished on all the fine points, widened, polished again if that moved it): the
     model's flips (surface.flips) and the exact half turns about its principal axes through its
@@ -460,7 +476,7 @@ def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: Sur
     poses = [best] + states
     keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), medium.mean(axis=0), 2.0,
                                   2 * best.gate)
-    return [refine_given(poses[i], medium, fine, surface, tolerance) for i in keep if i]
+    return [refine_given(poses[i], medium, fine, surface, tolerance, hopeless) for i in keep if i]
 
 
 def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
@@ -862,15 +878,16 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
 
 
-def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish):
+def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish, hopeless: float = np.inf):
     """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
     HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
     stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual
     scales on the medium points the tries are refined on) and keeps at least as many scan points on
     the model.  A refinement that stopped in a local minimum (a pose slid along a curved part: the
     scan points past the part's end pull it nowhere, point-to-plane) is pulled home; a right pose
-    (within FAR_OFF_FIT noises) is never touched."""
-    if not state.sigma > FAR_OFF_FIT * noise:
+    (within FAR_OFF_FIT noises) is never touched, nor is one whose residual scale is above ``hopeless``
+    (HOPELESS_FIT: it is no slide from fitting; a wrong model's poses are all such)."""
+    if not FAR_OFF_FIT * noise < state.sigma <= hopeless:
         return state
     moved = frames.apply(state.T, medium)
     found, residuals, normals = surface.tangent_planes(moved, state.gate)
