@@ -83,12 +83,11 @@ def bumpy():
     return vertices, triangles, points, _brute_force(points, vertices, triangles)
 
 
-@pytest.mark.parametrize("first_k", [2, 16])
-def test_distances_equal_brute_force_with_degenerate_and_large_faces(bumpy, first_k, monkeypatch):
+@pytest.mark.parametrize("nearest_k", [2, 16])
+def test_distances_equal_brute_force_with_degenerate_and_large_faces(bumpy, nearest_k, monkeypatch):
     """With few candidates first (2), most points need the search of every face within reach."""
     vertices, triangles, points, exact = bumpy
-    monkeypatch.setattr(mesh_distance, "FIRST_K", first_k)
-    monkeypatch.setattr(mesh_distance, "LATER_K", first_k)
+    monkeypatch.setattr(mesh_distance, "NEAREST_K", nearest_k)
     assert np.allclose(MeshDistance(vertices, triangles).distance(points), exact, rtol=0, atol=1e-9)
 
 

@@ -1,32 +1,33 @@
 """Exact point-to-mesh distances with numpy and scipy alone, for points near the mesh.
 
-open3d's BVH answers any query fast, but importing open3d costs a whole process ~0.5 s CPU, more
-than the queries of a calibration (its verdict and its report weigh points within a few mm of the
-workpiece).  Here each face is bounded by a sphere about its centroid (radius: its farthest corner,
-so every point of the face, a segment or a point too, lies within it).  A query point's K nearest
-centroids name candidate faces; the nearest one's exact distance is a first bound, and a face whose
-sphere lies beyond the best so far cannot hold a nearer point.  A face not among the K has its
-centroid at least the K-th distance away, so it lies at least that minus the largest radius away:
-when the best is within that, it is the exact answer; otherwise every face whose centroid lies
-within the best plus the largest radius is weighed.  Far from the mesh that is many faces a point:
-``candidates`` tells the caller ahead of time what a query would cost.
+open3d's BVH answers any query fast, but importing open3d costs a whole process ~0.5 s of CPU and
+~20 MB, about what a calibration's queries cost here (its verdict and its report weigh points within
+a few mm of the workpiece).  Each face is bounded by a sphere about its centroid (radius: its
+farthest corner, so every point of the face, a segment or a point too, lies within it), the faces
+in tiers of similar radius.  A query point's K nearest centroids of a tier name candidate faces;
+the nearest one's exact distance is a first bound, and a face whose sphere lies beyond the best so
+far cannot hold a nearer point.  A face of the tier not among the K has its centroid at least the
+K-th distance away, so it lies at least that minus the tier's largest radius away: when the best is
+within that, it is the exact answer; otherwise every face of the tier whose centroid lies within the
+best plus that radius is weighed.  Far from the mesh that is many faces a point: past a budget the
+caller's ``beyond`` (open3d) answers for the farthest points.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-# Centroids asked for first: near a mesh of even faces they nearly always settle a point.
-FIRST_K = 16
-# ... and of each later tier (larger faces, fewer: their K nearest reach far).
-LATER_K = 4
-# Faces weighed at most (about) by the points whose K nearest faces leave them in doubt, before the
-# farthest of those are handed to the caller's ``beyond``: a few hundred thousand pairs take ~0.1 s.
-BALL_PAIRS = 300_000
-# A tier of faces spans radii up to this many times its smallest (the first: the median radius).
+# Centroids of each tier asked for first: near a mesh of even faces they nearly always settle a point.
+NEAREST_K = 16
+# Faces weighed at most (about) by the points of a chunk whose K nearest faces leave them in doubt,
+# before the farthest of those are handed to the caller's ``beyond`` (~0.05 s of pairs).
+BALL_PAIRS = 150_000
+# The first tier of faces holds radii up to this many times the median; each next one twice as large.
 TIER_SPAN = 1.6
+# Points searched at once: their candidate pairs' temporaries stay within ~20 MB.
+CHUNK_POINTS = 8192
 # Queries of more points than this search the KD-tree on every core (fewer: one is faster).
-PARALLEL_POINTS = 10000
+PARALLEL_POINTS = 4096
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -76,8 +77,7 @@ class MeshDistance:
         radius = np.sqrt(np.max([_dot(v - centroid, v - centroid) for v in (a, b, c)], axis=0))
         # Rounding slack of a bound's comparison (mm): far below any distance the callers weigh.
         self._slack = 1e-9 * (1.0 + float(np.abs(a).max(initial=0.0)) + float(radius.max(initial=0.0)))
-        # Faces in tiers by radius (each tier's largest at most twice its smallest, the first holding at
-        # least the smaller half): a tier's bound for the faces a point's K nearest leave out is its own
+        # Faces in tiers by radius: a tier's bound for the faces a point's K nearest leave out is its own
         # largest radius, so a few large faces do not put every point in doubt.
         first = TIER_SPAN * max(float(np.median(radius)), self._slack)
         tier = np.maximum(np.ceil(np.log2(np.maximum(radius, first) / first)), 0).astype(np.int64)
@@ -91,9 +91,15 @@ class MeshDistance:
         given, answers instead for points that would weigh more faces than the search's budget (far from
         the mesh, where the faces within reach grow with the square of the distance)."""
         p = np.asarray(points, dtype=float).reshape(-1, 3) - self.origin
+        out = np.empty(len(p))
+        for start in range(0, len(p), CHUNK_POINTS):  # bounded temporaries (pairs gather a row each)
+            out[start:start + CHUNK_POINTS] = self._distance(p[start:start + CHUNK_POINTS], beyond)
+        return out
+
+    def _distance(self, p: np.ndarray, beyond) -> np.ndarray:
         best, handed = None, np.zeros(len(p), dtype=bool)
         for tier in self._tiers:
-            k = min(FIRST_K if best is None else LATER_K, len(tier.faces))
+            k = min(NEAREST_K, len(tier.faces))
             if best is None:  # the first tier's nearest face bounds the rest
                 reach, near = tier.tree.query(p, k=k, workers=_workers(p))
                 reach, near = reach.reshape(len(p), k), near.reshape(len(p), k)
