@@ -19,6 +19,11 @@ from scipy.spatial import cKDTree
 
 # Centroids of each tier asked for first: near a mesh of even faces they nearly always settle a point.
 NEAREST_K = 16
+# Queries of fewer points go to open3d (SurfaceModel.exact_distance).  Per point numpy costs 2-4x
+# open3d's BVH once that is imported (0.5 s): worth it for the few queries of a verdict's poses and a
+# report's region (thousands of points each), not for the hundreds of smaller ones with which a pose is
+# centred between edges (up to ~3000 points each).
+MIN_POINTS = 4096
 # Faces weighed at most (about) by the points of a chunk whose K nearest faces leave them in doubt,
 # before the farthest of those are handed to the caller's ``beyond`` (~0.05 s of pairs).
 BALL_PAIRS = 150_000
