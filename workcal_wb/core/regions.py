@@ -44,7 +44,7 @@ PLANE_CHUNK = 100  # sample points weighed against every plane at once (1.6 MB: 
 PLATFORM_BAND_MM = 1.0
 # Objects are split where the gap between points exceeds this many scan spacings.
 LINK_SPACINGS = 4.0
-# Clouds of at least this many voxels are split in two for their search of linked pairs (two threads).
+# Clouds of at least this many cells (voxel centres) are split in two for their search of linked pairs (two threads).
 SPLIT_POINTS = 20000
 # A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
 SIZE_RATIO_RANGE = (0.15, 1.5)
@@ -481,7 +481,8 @@ def _pairs_within(points: np.ndarray, distance: float) -> np.ndarray:
 
     A large cloud is cut in two at the median of its longest extent, each half searched on its own
     thread (the KD-tree lets go of the interpreter), and the pairs across the cut found among the
-    points within ``distance`` of it: a pair with a point on each side has both that close to the cut."""
+    points within ``distance`` of it: a pair with a point on each side has both that close to the cut
+    (the KD-tree pairs points up to ``distance`` apart, inclusive)."""
     def pairs_of(idx):
         # An unbalanced tree builds in half the time and finds the same pairs.
         found = cKDTree(points[idx], balanced_tree=False, compact_nodes=False).query_pairs(distance,
@@ -495,7 +496,7 @@ def _pairs_within(points: np.ndarray, distance: float) -> np.ndarray:
     low = points[:, axis] < cut
     with ThreadPoolExecutor(max_workers=1) as pool:
         other = pool.submit(pairs_of, np.flatnonzero(~low))
-        pairs = [pairs_of(np.flatnonzero(low)), pairs_of(np.flatnonzero(np.abs(points[:, axis] - cut) < distance))]
+        pairs = [pairs_of(np.flatnonzero(low)), pairs_of(np.flatnonzero(np.abs(points[:, axis] - cut) <= distance))]
         return np.concatenate([other.result()] + pairs)
 
 
