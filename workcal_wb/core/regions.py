@@ -44,8 +44,6 @@ PLANE_CHUNK = 100  # sample points weighed against every plane at once (1.6 MB: 
 PLATFORM_BAND_MM = 1.0
 # Objects are split where the gap between points exceeds this many scan spacings.
 LINK_SPACINGS = 4.0
-# Clouds of at least this many cells (voxel centres) are split in two for their search of linked pairs (two threads).
-SPLIT_POINTS = 20000
 # A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
 SIZE_RATIO_RANGE = (0.15, 1.5)
 MIN_CLUSTER_POINTS = 100
@@ -470,34 +468,11 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
     inverse = inverse.reshape(-1)
     counts = np.bincount(inverse, minlength=len(cells))
     centres = np.stack([np.bincount(inverse, points[:, k], len(cells)) for k in range(3)], axis=1) / counts[:, None]
-    pairs = _pairs_within(centres, link)
+    # An unbalanced tree builds in half the time and finds the same pairs (they only join components).
+    pairs = cKDTree(centres, balanced_tree=False, compact_nodes=False).query_pairs(link, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(cells), len(cells)))
     _, cell_labels = connected_components(graph, directed=False)
     return cell_labels[inverse]
-
-
-def _pairs_within(points: np.ndarray, distance: float) -> np.ndarray:
-    """Pairs of points closer than ``distance`` (each pair at least once: they only join components).
-
-    A large cloud is cut in two at the median of its longest extent, each half searched on its own
-    thread (the KD-tree lets go of the interpreter), and the pairs across the cut found among the
-    points within ``distance`` of it: a pair with a point on each side has both that close to the cut
-    (the KD-tree pairs points up to ``distance`` apart, inclusive)."""
-    def pairs_of(idx):
-        # An unbalanced tree builds in half the time and finds the same pairs.
-        found = cKDTree(points[idx], balanced_tree=False, compact_nodes=False).query_pairs(distance,
-                                                                                         output_type="ndarray")
-        return idx[found]
-
-    if len(points) < SPLIT_POINTS:
-        return pairs_of(np.arange(len(points)))
-    axis = int(np.argmax(points.max(axis=0) - points.min(axis=0)))
-    cut = float(np.median(points[:, axis]))
-    low = points[:, axis] < cut
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        other = pool.submit(pairs_of, np.flatnonzero(~low))
-        pairs = [pairs_of(np.flatnonzero(low)), pairs_of(np.flatnonzero(np.abs(points[:, axis] - cut) <= distance))]
-        return np.concatenate([other.result()] + pairs)
 
 
 def _present(labels: np.ndarray) -> np.ndarray:
