@@ -28,13 +28,6 @@ _FLIPPED_BINS = np.r_[np.arange(10, -1, -1), np.arange(11, 22), np.arange(32, 21
 NORMAL_AGREEMENT = 0.15
 # Hypotheses of a RANSAC round kept past each preemptive vote (at least; an eighth of them if more).
 PREEMPTIVE_KEEP = 50
-# The search stops once its best pose has been drawn this many times (hypotheses within SAME_DRAW_DISTANCES
-# inlier distances of it at the correspondences' centre and SAME_DRAW_DEG of its turn): a pose with 0.7
-# of its votes (a candidate the caller would still weigh) is drawn about 0.7^2 as often, so it is missed
-# with a chance of exp(-0.49 * 14) < 0.1 %.  A cluttered view of a blocky reference (4 % of the votes)
-# draws its pose 5-7 times a round: two rounds of four instead of four.
-CONFIRMATIONS = 14
-SAME_DRAW_DISTANCES, SAME_DRAW_DEG = 2.0, 10.0
 # A plane holding this fraction of the coarse points and wider than this many model diagonals
 # is a support (table, platform), not part of the model.
 PLANE_FRACTION, PLANE_WIDTH = 0.2, 1.2
@@ -152,16 +145,13 @@ def ransac_poses(src: np.ndarray, dst: np.ndarray, src_normals: np.ndarray, dst_
     ``min_edge``) and in the angles between the normals and the joining line (NORMAL_AGREEMENT);
     at most ``max_solved`` survivors are solved and voted on, which bounds the time.  The budget is
     spent in ``rounds``; the search stops early once a pose has the votes of ``enough`` of all
-    correspondences (a clean view: the rest would only add copies of it), or once the best pose has
-    been drawn CONFIRMATIONS times (a cluttered view: any pose that could rival it would have been
-    drawn by then too).
+    correspondences (a clean view: the rest would only add copies of it).
     """
     n = len(src)
     found_T, found_votes = [np.empty((0, 4, 4))], [np.empty(0, int)]
     if n < 2:
         return found_T[0], found_votes[0]
     order = rng.permutation(n)
-    centre = src.mean(axis=0)
     arm = 2 * inlier_distance  # normals enter the fit as points this far along them
     for _ in range(rounds):
         a, b = rng.integers(0, n, size=(2, samples // rounds))
@@ -195,21 +185,9 @@ def ransac_poses(src: np.ndarray, dst: np.ndarray, src_normals: np.ndarray, dst_
         found_votes.append(votes[alive])
         if votes[alive].max() >= enough * n:
             break
-        T, votes = np.concatenate(found_T), np.concatenate(found_votes)
-        if _times_drawn(T, votes, centre, SAME_DRAW_DISTANCES * inlier_distance) >= CONFIRMATIONS:
-            break
     T, votes = np.concatenate(found_T), np.concatenate(found_votes)
     best = np.argsort(-votes, kind="stable")[:keep]
     return T[best], votes[best]
-
-
-def _times_drawn(T: np.ndarray, votes: np.ndarray, centre: np.ndarray, distance: float) -> int:
-    """How many of the hypotheses ``T`` place ``centre`` within ``distance`` of where the best-voted
-    one does, turned within SAME_DRAW_DEG of it: how often the search drew the best pose."""
-    best = int(np.argmax(votes))
-    shift = np.linalg.norm(T[:, :3, :3] @ centre + T[:, :3, 3] - (T[best, :3, :3] @ centre + T[best, :3, 3]), axis=1)
-    cos = (np.einsum("hij,ij->h", T[:, :3, :3], T[best, :3, :3]) - 1) / 2
-    return int(np.count_nonzero((shift <= distance) & (cos >= np.cos(np.radians(SAME_DRAW_DEG)))))
 
 
 def _count_inliers(T: np.ndarray, src: np.ndarray, dst: np.ndarray, distance: float, chunk: int) -> np.ndarray:
