@@ -64,8 +64,10 @@ class CalibrationOptions:
 
 # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
 UNCERTAINTY_FACTOR = 3.0
-# Threads the bootstrap refits run on.
+# Threads the bootstrap refits run on, and the resamples drawn at a time (8 MB for two regions of
+# 20k points: a default calibration's refits are drawn at once).
 REFIT_THREADS = 2
+DRAWN_AT_ONCE = 8
 # Scans of one scene taken in the same units have extents within this factor of each other.
 UNIT_MISMATCH_RATIO = 8.0
 # A toolpath works on the part: its median distance to the model surface, as a fraction of the model
@@ -299,10 +301,12 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     threads = REFIT_THREADS if options.blas_threads == 1 else 1
     refits = []
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        for first in range(0, options.resamples, threads):  # drawn a few at a time: the draws of 100 refits are 100 MB
+        # Drawn DRAWN_AT_ONCE at a time (the draws of 100 refits are 100 MB), all of them handed to the
+        # pool at once: a thread that finishes its refit starts the next without waiting for the other's.
+        for first in range(0, options.resamples, DRAWN_AT_ONCE):
             jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
                      m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
-                    for _ in range(min(threads, options.resamples - first))
+                    for _ in range(min(DRAWN_AT_ONCE, options.resamples - first))
                     for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
             refits += pool.map(lambda job: _refit_pose(*job), jobs)
     rotations = []

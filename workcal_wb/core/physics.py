@@ -38,8 +38,10 @@ MIN_PIXELS, MIN_SHARE = 25, 0.1
 
 
 def contact(platform, surface: SurfaceModel, U: np.ndarray) -> float:
-    """Height of the model's lowest point, placed by U, above the platform (mm; negative: below it)."""
-    return float(platform.height(frames.apply(U, surface.points)).min())
+    """Height of the model's lowest point, placed by U, above the platform (mm; negative: below it):
+    the platform's up direction taken into the model's frame, so that the samples are not moved."""
+    up_in_model = U[:3, :3].T @ platform.up
+    return float((surface.points @ up_in_model).min() + (U[:3, 3] - platform.centre) @ platform.up)
 
 
 def sinks(platform, surface: SurfaceModel, U: np.ndarray) -> bool:

@@ -492,20 +492,32 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.nda
     """Clusters that could hold the model, each with whether it is larger than the model: those of
     its size, most alike first, then the larger ones (objects that touch, or clay joining them, make
     one cluster), smallest first."""
-    if len(idx) == 0:
-        return []
     alike, larger = [], []
-    for label in _present(labels):
-        members = idx[labels == label]
-        if len(members) < MIN_CLUSTER_POINTS:
-            continue
-        ratio = Cloud(points[members]).diagonal() / surface.diagonal
+    for members, diagonal in _clusters_of_size(points, idx, labels):
+        ratio = diagonal / surface.diagonal
         if SIZE_RATIO_RANGE[0] <= ratio <= SIZE_RATIO_RANGE[1]:
             alike.append((abs(np.log(ratio)), -len(members), members))
         elif ratio > SIZE_RATIO_RANGE[1]:
             larger.append((ratio, -len(members), members))
     return ([(members, False) for *_, members in sorted(alike, key=lambda item: item[:2])]
             + [(members, True) for *_, members in sorted(larger, key=lambda item: item[:2])])
+
+
+def _clusters_of_size(points, idx, labels) -> list[tuple[np.ndarray, float]]:
+    """(members, bounding-box diagonal) of each cluster of MIN_CLUSTER_POINTS or more, in label order,
+    its members in their order in ``idx``: one sort for all of them, not one pass over every point per cluster."""
+    if len(idx) == 0:
+        return []
+    order = np.argsort(labels, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(labels[order]) != 0])
+    ends = np.r_[starts[1:], len(order)]
+    large = ends - starts >= MIN_CLUSTER_POINTS
+    if not large.any():
+        return []
+    sorted_points = points[idx[order]]
+    low, high = np.minimum.reduceat(sorted_points, starts), np.maximum.reduceat(sorted_points, starts)
+    return [(idx[order[start:end]], float(np.linalg.norm(high[k] - low[k])))
+            for k, (start, end) in enumerate(zip(starts, ends)) if large[k]]
 
 
 def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, options: dict, role: str, near_mm: float,
