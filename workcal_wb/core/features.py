@@ -16,72 +16,96 @@ from scipy.spatial import cKDTree
 BINS = 11
 # Pairs whose angles are computed at once (each pair's own arithmetic: the chunk changes no bit).
 PAIR_CHUNK = 1 << 13
+# Points whose neighbourhoods are searched and described at once: a block's candidate pairs (up to a
+# few hundred per point) stay a few MB, where all points' pairs at once set a prepared model's peak.
+POINT_BLOCK = 1 << 10
 
 
 def fpfh(points: np.ndarray, normals: np.ndarray, radius: float, max_nn: int = 100) -> np.ndarray:
     """(N, 33) Fast Point Feature Histograms over the ``max_nn`` nearest neighbours within ``radius``;
-    consistent normal orientation matters for matching."""
+    consistent normal orientation matters for matching.
+
+    A block of points at a time (POINT_BLOCK): a point's histograms depend only on its own
+    neighbours, and its sums are taken in the same order whatever the block, so the features are
+    the same, bit for bit, for any block size."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     normals = np.ascontiguousarray(normals, dtype=np.float64)
     n = len(points)
     if n < 2:
         return np.zeros((n, 3 * BINS))
-    rows, cols, squared = _neighbours(points, radius, min(max_nn, n))
-    count = np.bincount(rows, minlength=n)
-    spfh = _simple_histograms(points, normals, rows, cols, count)
-    # Each neighbour's SPFH weighted by its inverse squared distance, summed nearest first (a sparse
-    # product adds a row's entries in the order they are stored).
-    near = squared > 0
-    starts = np.concatenate([[0], np.cumsum(np.bincount(rows[near], minlength=n))])
-    weights = csr_matrix((1.0 / squared[near], cols[near], starts), shape=(n, n))
-    features = (weights @ spfh).reshape(n, 3, BINS)
-    sums = features.sum(axis=2)
-    features *= np.divide(100.0, sums, out=np.ones_like(sums), where=sums != 0)[:, :, None]
-    features = features.reshape(n, 3 * BINS) + spfh
-    features[count == 0] = 0.0
+    tree = cKDTree(points)
+    blocks = [slice(start, min(start + POINT_BLOCK, n)) for start in range(0, n, POINT_BLOCK)]
+    neighbours = []  # per block: the neighbours and their squared distances
+    counts = np.empty(n, np.int64)  # neighbours per point
+    spfh = np.empty((n, 3 * BINS))
+    for block in blocks:
+        counts[block], cols, squared = _neighbours(tree, points, block, radius, min(max_nn, n))
+        spfh[block] = _simple_histograms(points, normals, block, counts[block], cols)
+        neighbours.append((cols, squared))
+    features = np.empty((n, 3 * BINS))
+    for block in blocks:
+        cols, squared = neighbours.pop(0)
+        features[block] = _weighted_neighbours(spfh, counts[block], cols, squared)
+    features += spfh
+    features[counts == 0] = 0.0
     return features
 
 
-def _neighbours(points: np.ndarray, radius: float, max_nn: int):
-    """(point, neighbour, squared distance) for each point's nearest ``max_nn`` neighbours closer than
-    ``radius``, itself excluded, nearest first, point by point."""
-    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
-    # Each pair both ways round; 32-bit indices, and one squared length per pair (the same both ways
-    # round, bit for bit), so a model's features take a third of the memory they would.
-    index = np.int32 if len(points) < 2**31 else np.int64
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(index)
-    cols = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(index)
-    squared = np.zeros(len(pairs))
-    for axis in range(3):
-        delta = points[pairs[:, 1], axis] - points[pairs[:, 0], axis]
+def _weighted_neighbours(spfh, count, cols, squared) -> np.ndarray:
+    """Each point's neighbours' SPFH weighted by their inverse squared distances, summed nearest
+    first (a sparse product adds a row's entries in the order they are stored), and scaled so
+    each of the three angles' histograms sums to 100."""
+    rows = np.repeat(np.arange(len(count)), count)
+    near = squared > 0
+    starts = np.concatenate([[0], np.cumsum(np.bincount(rows[near], minlength=len(count)))])
+    weights = csr_matrix((1.0 / squared[near], cols[near], starts), shape=(len(count), len(spfh)))
+    features = (weights @ spfh).reshape(len(count), 3, BINS)
+    sums = features.sum(axis=2)
+    features *= np.divide(100.0, sums, out=np.ones_like(sums), where=sums != 0)[:, :, None]
+    return features.reshape(len(count), 3 * BINS)
+
+
+def _neighbours(tree: cKDTree, points: np.ndarray, block: slice, radius: float, max_nn: int):
+    """(neighbours per point, neighbours, squared distances) of the points in ``block``: each one's
+    nearest ``max_nn`` closer than ``radius``, itself excluded, nearest first (equal distances by
+    index), point by point."""
+    found = cKDTree(points[block]).sparse_distance_matrix(tree, radius, output_type="ndarray")
+    index = np.int32 if len(points) < 2**31 else np.int64  # a model's features in less memory
+    rows, cols = found["i"].astype(index), found["j"].astype(index)
+    del found
+    squared = np.zeros(len(rows))
+    for axis in range(3):  # the same squared length either way round, bit for bit
+        delta = points[cols, axis] - points[rows + block.start, axis]
         squared += delta * delta
-    del pairs
-    squared = np.concatenate([squared, squared])
-    order = np.lexsort((squared, rows))  # by point, nearest first, ties in pair order
+    keep = (cols != rows + block.start) & (squared < radius * radius)
+    rows, cols, squared = rows[keep], cols[keep], squared[keep]
+    order = np.lexsort((cols, squared, rows))  # by point, nearest first, then by index
     rows, cols, squared = rows[order], cols[order], squared[order]
     del order
     rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
-    keep = (rank < max_nn - 1) & (squared < radius * radius)  # max_nn counts the point itself
-    return rows[keep].astype(np.int64), cols[keep].astype(np.int64), squared[keep]
+    keep = rank < max_nn - 1  # max_nn counts the point itself
+    count = np.bincount(rows[keep], minlength=block.stop - block.start)
+    return count, cols[keep], squared[keep]
 
 
-def _simple_histograms(points, normals, rows, cols, count) -> np.ndarray:
-    """SPFH: per point, the histograms of the three Darboux-frame angles to each neighbour, each
-    neighbour adding 100 / (neighbours) to one bin of each."""
-    bins = np.empty((3, len(rows)), np.int64)  # per angle, each pair's bin among all points' bins
+def _simple_histograms(points, normals, block: slice, count, cols) -> np.ndarray:
+    """SPFH of the points in ``block``: per point, the histograms of the three Darboux-frame angles
+    to each neighbour, each neighbour adding 100 / (neighbours) to one bin of each."""
+    rows = np.repeat(np.arange(len(count)), count)
+    bins = np.empty((3, len(rows)), np.int64)  # per angle, each pair's bin among the block's bins
     for start in range(0, len(rows), PAIR_CHUNK):  # a chunk of pairs at a time: their temporaries stay small
         part = slice(start, start + PAIR_CHUNK)
-        i, j = rows[part], cols[part]
+        i, j = rows[part] + block.start, cols[part]
         f1, f2, f3 = _pair_features(points[i], normals[i], points[j], normals[j])
         # floor, then clipped to the 11 bins (clipping first keeps the whole part of a non-negative value)
         bins[0, part] = np.clip(BINS * (f1 + np.pi) / (2.0 * np.pi), 0, BINS - 0.5)
         bins[1, part] = np.clip(BINS * (f2 + 1.0) * 0.5, 0, BINS - 0.5)
         bins[2, part] = np.clip(BINS * (f3 + 1.0) * 0.5, 0, BINS - 0.5)
-        bins[:, part] += i * (3 * BINS) + BINS * np.arange(3)[:, None]
+        bins[:, part] += rows[part] * (3 * BINS) + BINS * np.arange(3)[:, None]
     increment = 100.0 / np.maximum(count[rows], 1)
     # One angle at a time: a bin only ever counts pairs of its own angle, each added in pair order,
     # so the sums are those of one count over all three (to the bit) in a third of the memory.
-    histograms = np.zeros(len(points) * 3 * BINS)
+    histograms = np.zeros(len(count) * 3 * BINS)
     for angle in bins:
         histograms += np.bincount(angle, weights=increment, minlength=len(histograms))
     return histograms.reshape(-1, 3 * BINS)
