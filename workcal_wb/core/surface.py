@@ -627,32 +627,7 @@ class SurfaceModel:
 
     @cached_property
     def exact_distance(self):
-        """Exact unsigned point-to-mesh distance function, or None for point models: NaN for a point
-        that is not finite (in float32, as open3d needs).  A query of many points is answered with
-        numpy near the mesh (mesh_distance: a calibration's verdict and report need no open3d import,
-        ~0.5 s of CPU), points far enough to weigh too many faces by open3d's BVH; a query of few
-        points (an edge's slide asks hundreds of them) by open3d's BVH, several times faster a call."""
+        """Exact unsigned point-to-mesh distance function (open3d BVH), or None for point models."""
         if not self.is_mesh:
             return None
-        return self._exact_distance
-
-    @cached_property
-    def _mesh_distance(self):
-        from .mesh_distance import MeshDistance
-
-        return MeshDistance(self.vertices, self.triangles)
-
-    def _exact_distance(self, points: np.ndarray) -> np.ndarray:
-        from .mesh_distance import MIN_POINTS
-
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
-        if len(points) < MIN_POINTS:
-            return self._bvh_distance(points)
-        with np.errstate(over="ignore", invalid="ignore"):
-            finite = np.isfinite((points - self._mesh_distance.origin).astype(np.float32)).all(axis=1)
-        out = np.full(len(points), np.nan)
-        out[finite] = self._mesh_distance.distance(points[finite], beyond=self._bvh_distance)
-        return out
-
-    def _bvh_distance(self, points: np.ndarray) -> np.ndarray:
-        return self._query(points, lambda scene, q: {"d": scene.compute_distance(q)})["d"].astype(float)
+        return lambda points: self._query(points, lambda scene, q: {"d": scene.compute_distance(q)})["d"].astype(float)
