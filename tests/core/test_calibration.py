@@ -222,19 +222,22 @@ def test_wrong_model_fails_without_polishing_poses_that_cannot_fit(plain, monkey
     """The wrong model matched on a region (an ellipsoid on the block's points) fails and says why, and
     the poses it is tried in, which miss the scan by many times the verdict's limit, are neither slid
     home nor taken to the exact surface: no polish can bring them within it (the wrong reference
-    model took minutes to be named when every such pose was polished like a right one)."""
+    model took minutes to be named when every such pose was polished like a right one).  Nor are the
+    rivals weighed by the points they leave far off (each an exact distance per pose): that test can
+    only tell an "ok" from an ambiguous result."""
     scene, scan = plain
     wrong = shapes.ellipsoid().transformed(scene.reference.pose)
     block = scan.points[scan.mask("reference")]
-    calls = {"refine": 0, "refine_exact": 0}
-    for name in calls:
-        def counted(*args, _name=name, _original=getattr(match_module, name), **kwargs):
+    calls = {"refine": 0, "refine_exact": 0, "_distances": 0}
+    for owner, name in ((match_module, "refine"), (match_module, "refine_exact"), (match_module.Judge, "_distances")):
+        def counted(*args, _name=name, _original=getattr(owner, name), **kwargs):
             calls[_name] += 1
             return _original(*args, **kwargs)
-        monkeypatch.setattr(match_module, name, counted)
+        monkeypatch.setattr(owner, name, counted)
     result = match_module.match(Cloud(block[::2], name="block"), wrong)
     assert result.status == "failed" and any("does not fit the scan" in r for r in result.reasons), result.reasons
-    assert calls["refine_exact"] == 0 and calls["refine"] <= 60, calls
+    assert len(result.candidates) > 1, "the wrong model's poses have rivals"
+    assert calls["refine_exact"] == 0 and calls["refine"] <= 60 and calls["_distances"] == 0, calls
 
 
 def test_workpiece_missing_is_named(plain):

@@ -615,15 +615,22 @@ class Judge:
                                                       polish)
         else:
             turned = [False] * len(poses)
+        # "far_z" is weighed only for a result that could be "ok" (weigh_far_off): it costs an exact
+        # distance per pose, and a failed result's status and reasons never depend on it.
         judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False,
                    "turn": False, "fits": self._fits(poses[0])}]
-        best_distances = self._distances(poses[0].T) if len(poses) > 1 else None  # no rival: no far-off test
         for p, e, t in zip(poses[1:], weighed[1:], turned[1:]):
             judged.append({"T": p.T, "evidence": e, "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR),
-                           "far_z": self._far_off(best_distances, p.T),
-                           "other_side": self._from_the_other_side(poses[0].T, p.T), "turn": t,
+                           "far_z": float("nan"), "other_side": self._from_the_other_side(poses[0].T, p.T), "turn": t,
                            "fits": self._fits(p)})
         return poses[0], judged
+
+    def weigh_far_off(self, judged: list) -> None:
+        """Set each rival's "far_z" in a ranking (rank's): its far_off_test against the best."""
+        if len(judged) > 1:  # no rival: no far-off test
+            best_distances = self._distances(judged[0]["T"])
+            for entry in judged[1:]:
+                entry["far_z"] = self._far_off(best_distances, entry["T"])
 
     def _fits(self, state) -> bool:
         """Whether a refined pose fits the scan within FAR_OFF_FIT noises: only then are the points it
@@ -655,11 +662,10 @@ class Judge:
                                  < CLOSE_CALL * sig for e in weighed[1:len(turns) + 1]):
             self._level(fine=True)  # a close call: weigh again, finely
             weighed = [self.evidence(p.T) for p in poses]
-        best_distances = self._distances(poses[0].T)
         for i in sorted(range(1, len(turns) + 1), key=lambda i: -weighed[i].score):
             z = visibility.compare(weighed[0].cells, weighed[i].cells, CELL_VARIANCE_FLOOR)
             if z < -sig or (z < sig and self._fits(poses[0]) and self._fits(poses[i])
-                            and self._far_off(best_distances, poses[i].T) <= -sig):
+                            and self._far_off(self._distances(poses[0].T), poses[i].T) <= -sig):
                 poses[0], poses[i] = poses[i], poses[0]
                 weighed[0], weighed[i] = weighed[i], weighed[0]
                 break
@@ -969,6 +975,8 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
                        "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
     status = FAILED if reasons else OK
+    if status == OK:
+        judge.weigh_far_off(judged)
     listed = _candidates(judged, surface, T)
     significance = options.rival_significance
     # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
