@@ -368,7 +368,7 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
 
 
 def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-            tolerance: float, hopeless: float = np.inf):
+            tolerance: float, hopeless: float):
     """The best pose refined on all the fine points, and the distinct rivals refined on the medium
     ones (RefineStates, scan -> model).
 
@@ -398,7 +398,7 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
     return best, [poses[i] for i in keep[1:]]
 
 
-def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float, hopeless: float = np.inf):
+def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float, hopeless: float):
     """A pose refined on the medium points, finished on all the fine ones.  When the robust fit
     leaves a motion nearly free against a mesh, it goes on against the exact surface and centres the
     pose between the edges that pin the motion (see edges), unless its residual scale is above
@@ -451,7 +451,7 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
 
 
 def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-                        tolerance: float, hopeless: float = np.inf) -> list:
+                        tolerance: float, hopeless: float) -> list:
     """The best pose's near-symmetric turns, each refined to convergence exactly as the best was
     (refine_given: polished on all the fine points, widened, polished again if that moved it): the
     model's flips (surface.flips) and the exact half turns about its principal axes through its
@@ -884,7 +884,7 @@ def _widened(state, medium: np.ndarray, surface: SurfaceModel):
     return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
 
 
-def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish, hopeless: float = np.inf):
+def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish, hopeless: float):
     """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
     HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
     stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual

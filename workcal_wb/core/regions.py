@@ -575,8 +575,7 @@ def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, toleran
                 f"{rejected.within_tolerance_pct:.0f}% of its points lie within the tolerance {tolerance_mm:g} mm "
                 f"(at least {MIN_WITHIN_TOLERANCE_PCT[role]:.0f}% needed): the tolerance seems to be below the "
                 "scan's noise; raise it")
-    sizes = sorted((Cloud(points[idx[labels == label]]).diagonal() for label in np.unique(labels)
-                    if np.sum(labels == label) >= MIN_CLUSTER_POINTS), reverse=True) if len(idx) else []
+    sizes = sorted((diagonal for _, diagonal in _clusters_of_size(points, idx, labels)), reverse=True)
     if not sizes:
         return "no object is left standing on the platform; is it in view?"
     if not any(SIZE_RATIO_RANGE[0] <= size / surface.diagonal <= SIZE_RATIO_RANGE[1] for size in sizes):
