@@ -47,3 +47,126 @@ def test_a_copied_model_keeps_working_after_the_original_is_let_go():
         assert (idx >= 0).all()
         # a cell's sample is at most a cell diagonal farther than the point's own nearest sample
         assert (np.linalg.norm(query - copied.points[idx], axis=1) <= nearest + np.sqrt(3) * kept.cell + 1e-9).all()
+
+
+def _traced_peak_mb(work):
+    """(MB work allocated at its peak above what was live when it started, its result), by tracemalloc,
+    which counts numpy's buffers exactly (unlike the resident set, deterministic)."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        result = work()
+        return (tracemalloc.get_traced_memory()[1] - before) / 1e6, result
+    finally:
+        tracemalloc.stop()
+
+
+def _large_scan(n=500_000, seed=0):
+    return np.random.default_rng(seed).normal(size=(n, 3)) * [100.0, 80.0, 60.0] + 500.0
+
+
+def test_voxel_keys_of_a_large_scan_hold_no_copy_of_it():
+    """The whole scan's cells as floats and as integers were two copies of it (24 MB for 500k points,
+    6 columns): now keys (one column) and a block's cells."""
+    from workcal_wb.core import pointops
+
+    points = _large_scan()
+    column_mb = len(points) * 8 / 1e6
+    peak, keys = _traced_peak_mb(lambda: pointops.voxel_keys(points, 2.0))
+    assert peak < 1.5 * column_mb
+    cells = np.floor((points - points.min(axis=0)) / 2.0).astype(np.int64)
+    assert np.array_equal(keys, (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2])
+
+
+def test_voxel_keys_are_the_same_whatever_the_block(monkeypatch):
+    """Blocks give the keys of the whole; a cloud wider than 2**21 voxels falls back to ranks even when
+    only a later block reaches that far."""
+    from workcal_wb.core import pointops
+
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(5000, 3)) * 50
+    far = points.copy()
+    far[-1] = [1e7, 0, 0]
+    whole = {name: pointops.voxel_keys(cloud, 0.5) for name, cloud in (("near", points), ("far", far))}
+    monkeypatch.setattr(pointops, "KEY_BLOCK", 64)
+    for name, cloud in (("near", points), ("far", far)):
+        assert np.array_equal(pointops.voxel_keys(cloud, 0.5), whole[name])
+    ranks = pointops.voxel_keys(far, 0.5)
+    assert len(np.unique(ranks)) == len(np.unique(np.floor((far - far.min(axis=0)) / 0.5), axis=0))
+    assert ranks.max() < len(far)  # ranks, not 21-bit fields the far voxel would overflow
+
+
+def test_voxel_centroids_are_the_sums_of_each_voxels_points():
+    """voxel_downsample sums an axis at a time (no copy of the scan in voxel order): the same centroids,
+    bit for bit, as summing the sorted rows whole."""
+    from workcal_wb.core import pointops
+
+    points = _large_scan(200_000, seed=1)
+    centroids, first, counts = pointops.voxel_downsample(points, 20.0, counts=True)
+    keys = pointops.voxel_keys(points, 20.0)
+    order = np.argsort(keys)
+    starts = np.flatnonzero(np.r_[True, np.diff(keys[order]) != 0])
+    assert np.array_equal(centroids, np.add.reduceat(points[order], starts, axis=0) / counts[:, None])
+    assert np.array_equal(first, order[starts])
+
+
+def test_duplicate_points_are_found_without_copies_of_the_scan():
+    """The duplicate search of a 500k-point scan (run on every scan a match is given) kept about six
+    columns' worth of temporaries (24 MB); now under five, and the same points are found: the first
+    of each repeated point is kept, -0.0 equals 0.0."""
+    from workcal_wb.core import geometry
+
+    points = _large_scan().astype(np.float32).astype(float)
+    rng = np.random.default_rng(2)
+    copies = rng.integers(0, len(points), 5000)
+    points[rng.integers(0, len(points), 5000)] = points[copies]
+    points[:3] = [0.0, 0.0, 0.0]
+    points[3] = [-0.0, 0.0, -0.0]
+    peak, duplicate = _traced_peak_mb(lambda: geometry._duplicates(points))
+    assert peak < 5 * len(points) * 8 / 1e6
+    first = np.zeros(len(points), bool)
+    first[np.unique(points + 0.0, axis=0, return_index=True)[1]] = True
+    assert np.array_equal(duplicate, ~first)
+
+
+def test_the_support_plane_is_found_a_block_of_points_at_a_time(monkeypatch):
+    """Every coarse point against every candidate plane at once was a (points x 200) float matrix (64 MB
+    for 20k points, the largest transient of a match of a scene); now a block at a time, the same plane
+    found."""
+    from workcal_wb.core import global_search
+
+    rng = np.random.default_rng(4)
+    table = np.column_stack([rng.uniform(-300, 300, (15000, 2)), rng.normal(0, 0.1, 15000)])
+    part = rng.normal(size=(5000, 3)) * 30 + [0, 0, 40]
+    points = np.r_[table, part]
+    peak, kept = _traced_peak_mb(lambda: global_search.without_large_plane(points, 2.0, 100.0,
+                                                                          np.random.default_rng(1)))
+    assert peak < 5.0
+    assert len(kept) < len(part) + 200 and np.isin(part[:, 2], kept[:, 2]).mean() > 0.95
+    monkeypatch.setattr(global_search, "PLANE_BLOCK", 7)
+    assert np.array_equal(global_search.without_large_plane(points, 2.0, 100.0, np.random.default_rng(1)), kept)
+
+
+def test_sample_cover_of_a_large_mesh_is_found_a_block_of_faces_at_a_time(monkeypatch):
+    """A match's first far-off test asks how far the mesh lies from its samples: every face's corners at
+    once, and their copies, were 57 MB for 200k faces (the peak of a match against a large model)."""
+    from workcal_wb.core import surface as surface_module
+
+    k = 320
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, k, endpoint=False), np.linspace(0.05, np.pi - 0.05, k))
+    vertices = 50 * np.column_stack([np.cos(u).ravel() * np.sin(v).ravel(), np.sin(u).ravel() * np.sin(v).ravel(),
+                                     np.cos(v).ravel()])
+    ring = np.arange(k * k).reshape(k, k)
+    right = np.roll(ring, -1, axis=1)
+    triangles = np.r_[np.column_stack([ring[:-1].ravel(), right[:-1].ravel(), ring[1:].ravel()]),
+                      np.column_stack([right[:-1].ravel(), right[1:].ravel(), ring[1:].ravel()])]
+    mesh = Cloud(vertices, triangles=triangles, name="sphere")
+    surface = SurfaceModel(mesh, 0)
+    peak, cover = _traced_peak_mb(lambda: surface.sample_cover)
+    assert peak < 8.0
+    corners = vertices[triangles]
+    assert cover == np.linalg.norm(corners - corners.mean(axis=1, keepdims=True), axis=2).max()
+    monkeypatch.setattr(surface_module, "COVER_BLOCK", 1000)
+    assert SurfaceModel(mesh, 0).sample_cover == cover

@@ -118,20 +118,23 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
                              "corners at one point)")
         return _verified(Cloud(pts, normals, cloud.triangles[~(collapsed | repeated)], cloud.name, warnings,
                                cloud.sensors, cloud.sensor_of))
-    keep = np.flatnonzero(finite)
-    if len(keep) < len(pts):
-        warnings.append(f"{cloud.name}: ignored {len(pts) - len(keep)} points with NaN or infinite coordinates "
+    keep = finite  # a mask, not indices: a large scan's copies set a match's peak memory
+    kept = int(keep.sum())
+    if kept < len(pts):
+        warnings.append(f"{cloud.name}: ignored {len(pts) - kept} points with NaN or infinite coordinates "
                         f"(or beyond {MAX_COORDINATE_MM / 1e6:g} km)")
-    if len(keep) == 0:
+    if kept == 0:
         raise InputError(f"{cloud.name}: all {len(pts)} points have NaN or infinite coordinates (or beyond "
                          f"{MAX_COORDINATE_MM / 1e6:g} km)")
-    duplicate = _duplicates(pts if len(keep) == len(pts) else pts[keep])
+    duplicate = _duplicates(pts if kept == len(pts) else pts[keep])
     if duplicate.any():
         warnings.append(f"{cloud.name}: ignored {int(duplicate.sum())} duplicate points")
-        keep = keep[~duplicate]
-    if len(keep) < min_points:
-        raise InputError(f"{cloud.name}: only {len(keep)} usable points, at least {min_points} needed")
-    if len(keep) == len(pts):
+        keep = keep.copy()
+        keep[np.flatnonzero(keep)[duplicate]] = False
+        kept -= int(duplicate.sum())
+    if kept < min_points:
+        raise InputError(f"{cloud.name}: only {kept} usable points, at least {min_points} needed")
+    if kept == len(pts):
         return _verified(Cloud(pts, normals, None, cloud.name, warnings, cloud.sensors, cloud.sensor_of))
     return _verified(Cloud(pts[keep], None if normals is None else normals[keep], None, cloud.name, warnings,
                            cloud.sensors, None if cloud.sensor_of is None else cloud.sensor_of[keep]))
@@ -182,16 +185,26 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
     only those sharing a bucket under each of a few hashes are sorted by their key (stably) and
     compared exactly with their neighbours, so a collision cannot merge two points and millions of
     unique points are never sorted."""
+    # Integer work in place, one column's copy at a time (+ 0.0: -0.0 as 0.0): a large scan's copies
+    # set a match's peak memory.
     key = np.zeros(len(points), np.int64)
-    for k, factor in enumerate((1000003, 999983, 1)):  # one column's copy at a time; + 0.0: -0.0 as 0.0
-        key += (points[:, k] + 0.0).view(np.int64) * factor
-    order = np.arange(len(points))  # the candidates, ascending
+    for k, factor in enumerate((1000003, 999983, 1)):
+        column = (points[:, k] + 0.0).view(np.int64)
+        column *= factor
+        key += column
+    column = None
+    order = None  # the candidates, ascending (None: every point)
     # A bucket is the top bits of a multiplicative hash of the key: the key's low bits are all zero for
     # coordinates that were float32 (most scanners' files), so they would put every point in one bucket.
     for multiplier in _BUCKET_HASHES:
-        bits = int(np.clip(np.ceil(np.log2(2 * len(order) + 1)), 10, 23))
-        bucket = ((key[order].view(np.uint64) * np.uint64(multiplier)) >> np.uint64(64 - bits)).astype(np.intp)
-        order = order[np.bincount(bucket, minlength=1 << bits)[bucket] > 1]
+        candidates = len(points) if order is None else len(order)
+        bits = int(np.clip(np.ceil(np.log2(2 * candidates + 1)), 10, 23))
+        bucket = (key.copy() if order is None else key[order]).view(np.uint64)
+        bucket *= np.uint64(multiplier)
+        bucket >>= np.uint64(64 - bits)
+        bucket = bucket.view(np.int64)  # under 2**23
+        shared = np.bincount(bucket, minlength=1 << bits) > 1
+        order = np.flatnonzero(shared[bucket]) if order is None else order[shared[bucket]]
     order = order[np.argsort(key[order], kind="stable")]
     later, earlier = order[1:], order[:-1]
     pairs = np.flatnonzero(key[later] == key[earlier])

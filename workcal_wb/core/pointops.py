@@ -92,14 +92,28 @@ def median_spacing(points: np.ndarray, sample: int = 20000, seed: int = 0) -> fl
     return float(np.median(d[:, 1]) * np.sqrt(len(subset) / n))
 
 
+KEY_BLOCK = 1 << 14  # points given their voxel keys at a time
+
+
 def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
     """One int64 key per point naming its voxel: 21 bits per axis, or, for a cloud more than 2**21
     voxels across (a stray point far away), the voxel's rank among the occupied ones, so that two
     distant voxels never share a key."""
-    cells = np.floor((points - points.min(axis=0)) / voxel).astype(np.int64)
-    if len(cells) and cells.max() >= 1 << 21:
-        return np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1).astype(np.int64)
-    return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
+    low = points.min(axis=0) if len(points) else np.zeros(3)
+    keys = np.empty(len(points), dtype=np.int64)
+    for start in range(0, len(points), KEY_BLOCK):  # a block at a time: the cells of a whole large
+        # scan, as floats and as integers, were two copies of it
+        cells = _cells(points[start:start + KEY_BLOCK], low, voxel)
+        if cells.max() >= 1 << 21:
+            return np.unique(_cells(points, low, voxel), axis=0, return_inverse=True)[1].reshape(-1).astype(np.int64)
+        keys[start:start + KEY_BLOCK] = (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
+    return keys
+
+
+def _cells(points: np.ndarray, low: np.ndarray, voxel: float) -> np.ndarray:
+    cells = points - low
+    cells /= voxel
+    return np.floor(cells, out=cells).astype(np.int64)
 
 
 def voxel_downsample(points: np.ndarray, voxel: float, counts: bool = False):
@@ -111,10 +125,12 @@ def voxel_downsample(points: np.ndarray, voxel: float, counts: bool = False):
     """
     keys = voxel_keys(points, voxel)
     order = np.argsort(keys)
-    sorted_keys = keys[order]
+    sorted_keys, keys = keys[order], None  # a large scan's keys go before its columns are gathered
     starts = np.flatnonzero(np.r_[True, sorted_keys[1:] != sorted_keys[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
-    centroids = np.add.reduceat(points[order], starts, axis=0) / sizes[:, None]
+    # An axis at a time (the same sums, bit for bit): points[order] whole was a copy of the scan.
+    centroids = np.stack([np.add.reduceat(points[order, axis], starts) for axis in range(3)], axis=1)
+    centroids /= sizes[:, None]
     return (centroids, order[starts], sizes) if counts else (centroids, order[starts])
 
 

@@ -41,6 +41,8 @@ FILL_CHUNK = 1 << 15
 # live at once: ~60 bytes a cell; 2^18 made the figurine's finest grid peak 28 MB traced, 2^16 22 MB,
 # the same cells filled).
 NEAR_SLAB_CELLS = 1 << 16
+# sample_cover weighs this many faces at a time (~500 bytes a face at once).
+COVER_BLOCK = 1 << 13
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
 # level doubles both, so a loose gate does not fill a fine grid far from the surface.
 GATE_CELLS = 16
@@ -615,9 +617,14 @@ class SurfaceModel:
         area has a sample at its centroid (pointops.sample_triangles), so its points lie within its
         farthest corner's distance of that; a face without one is a segment, each point of which lies
         within half its length of an end, and that end within its own nearest sample's distance of one.
-        Meshes only; computed once per model (each match's far-off test asks for it)."""
-        corners = self.vertices[self.triangles]  # faces x 3 corners x 3
-        flat = pointops.triangle_normals_and_areas(self.vertices, self.triangles)[1] <= 0
+        Meshes only; computed once per model (each match's far-off test asks for it), a block of faces
+        at a time (the corners of a whole large mesh, and their copies, set a match's peak memory)."""
+        return max((self._cover(self.triangles[start:start + COVER_BLOCK])
+                    for start in range(0, len(self.triangles), COVER_BLOCK)), default=0.0)
+
+    def _cover(self, triangles: np.ndarray) -> float:
+        corners = self.vertices[triangles]  # faces x 3 corners x 3
+        flat = pointops.triangle_normals_and_areas(self.vertices, triangles)[1] <= 0
         cover = np.linalg.norm(corners - corners.mean(axis=1, keepdims=True), axis=2).max(axis=1)
         if flat.any():
             ends = self.tree.query(corners[flat].reshape(-1, 3))[0].reshape(-1, 3).max(axis=1)
