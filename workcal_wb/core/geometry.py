@@ -129,9 +129,8 @@ def checked(cloud: Cloud, min_points: int = 1) -> Cloud:
     duplicate = _duplicates(pts if kept == len(pts) else pts[keep])
     if duplicate.any():
         warnings.append(f"{cloud.name}: ignored {int(duplicate.sum())} duplicate points")
-        keep = keep.copy()
         keep[np.flatnonzero(keep)[duplicate]] = False
-        kept -= int(duplicate.sum())
+        kept = int(keep.sum())
     if kept < min_points:
         raise InputError(f"{cloud.name}: only {kept} usable points, at least {min_points} needed")
     if kept == len(pts):

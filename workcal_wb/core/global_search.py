@@ -55,7 +55,8 @@ def without_large_plane(points: np.ndarray, voxel: float, model_diagonal: float,
     normals, triples = normals[ok] / length[ok, None], triples[ok]
     offsets = np.einsum("tj,tj->t", triples[:, 0], normals)
     # A block of points against every plane at a time, kept as bits: all the (N, T) distances at once
-    # were a match's largest transient (64 MB for 20k coarse points).
+    # were a match's largest transient (64 MB for 20k coarse points).  The same plane is found, save
+    # for a point within a few ulps of the band (BLAS may sum a short block another way).
     votes, near = np.zeros(len(normals), dtype=np.int64), []
     for start in range(0, len(points), PLANE_BLOCK):
         block = np.abs(points[start:start + PLANE_BLOCK] @ normals.T - offsets) < voxel

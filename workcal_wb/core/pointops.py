@@ -101,8 +101,8 @@ def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
     distant voxels never share a key."""
     low = points.min(axis=0) if len(points) else np.zeros(3)
     keys = np.empty(len(points), dtype=np.int64)
-    for start in range(0, len(points), KEY_BLOCK):  # a block at a time: the cells of a whole large
-        # scan, as floats and as integers, were two copies of it
+    # A block at a time: the cells of a whole large scan, as floats and as integers, were two copies of it.
+    for start in range(0, len(points), KEY_BLOCK):
         cells = _cells(points[start:start + KEY_BLOCK], low, voxel)
         if cells.max() >= 1 << 21:
             return np.unique(_cells(points, low, voxel), axis=0, return_inverse=True)[1].reshape(-1).astype(np.int64)
@@ -111,9 +111,7 @@ def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
 
 
 def _cells(points: np.ndarray, low: np.ndarray, voxel: float) -> np.ndarray:
-    cells = points - low
-    cells /= voxel
-    return np.floor(cells, out=cells).astype(np.int64)
+    return np.floor((points - low) / voxel).astype(np.int64)
 
 
 def voxel_downsample(points: np.ndarray, voxel: float, counts: bool = False):
@@ -129,8 +127,7 @@ def voxel_downsample(points: np.ndarray, voxel: float, counts: bool = False):
     starts = np.flatnonzero(np.r_[True, sorted_keys[1:] != sorted_keys[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
     # An axis at a time (the same sums, bit for bit): points[order] whole was a copy of the scan.
-    centroids = np.stack([np.add.reduceat(points[order, axis], starts) for axis in range(3)], axis=1)
-    centroids /= sizes[:, None]
+    centroids = np.stack([np.add.reduceat(points[order, axis], starts) for axis in range(3)], axis=1) / sizes[:, None]
     return (centroids, order[starts], sizes) if counts else (centroids, order[starts])
 
 

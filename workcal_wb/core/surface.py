@@ -41,7 +41,7 @@ FILL_CHUNK = 1 << 15
 # live at once: ~60 bytes a cell; 2^18 made the figurine's finest grid peak 28 MB traced, 2^16 22 MB,
 # the same cells filled).
 NEAR_SLAB_CELLS = 1 << 16
-# sample_cover weighs this many faces at a time (~500 bytes a face at once).
+# sample_cover weighs this many faces at a time (~300 bytes a face at once).
 COVER_BLOCK = 1 << 13
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
 # level doubles both, so a loose gate does not fill a fine grid far from the surface.
