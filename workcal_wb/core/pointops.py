@@ -99,7 +99,7 @@ def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
     """One int64 key per point naming its voxel: 21 bits per axis, or, for a cloud more than 2**21
     voxels across (a stray point far away), the voxel's rank among the occupied ones, so that two
     distant voxels never share a key."""
-    low = points.min(axis=0) if len(points) else np.zeros(3)
+    low = points.min(axis=0)
     keys = np.empty(len(points), dtype=np.int64)
     # A block at a time: the cells of a whole large scan, as floats and as integers, were two copies of it.
     for start in range(0, len(points), KEY_BLOCK):
@@ -127,7 +127,8 @@ def voxel_downsample(points: np.ndarray, voxel: float, counts: bool = False):
     starts = np.flatnonzero(np.r_[True, sorted_keys[1:] != sorted_keys[:-1]])
     sizes = np.diff(np.r_[starts, len(order)])
     # An axis at a time (the same sums, bit for bit): points[order] whole was a copy of the scan.
-    centroids = np.stack([np.add.reduceat(points[order, axis], starts) for axis in range(3)], axis=1) / sizes[:, None]
+    sums = np.stack([np.add.reduceat(points[order, axis], starts) for axis in range(3)], axis=1)
+    centroids = sums / sizes[:, None]
     return (centroids, order[starts], sizes) if counts else (centroids, order[starts])
 
 
