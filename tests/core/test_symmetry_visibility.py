@@ -112,3 +112,19 @@ def test_viewing_direction_and_wall_thickness_from_a_real_view():
     view = visibility.View(seen.mean(axis=0) + 700.0 * direction, seen.mean(axis=0), 2.0).framed(seen)
     thickness = visibility.wall_thickness(view, surface.points, surface.normals)
     assert np.median(thickness[np.isfinite(thickness)]) == pytest.approx(8.0, abs=0.5)
+
+
+def test_a_point_beside_the_sensor_is_outside_its_view():
+    """A point off the view's axis by more than any scanner's field (here beside the sensor, nearly in
+    its plane) has no pixel, as one behind it has none: its pixel coordinates grow without bound as it
+    nears that plane, and a window framed around it asked for hundreds of GB (a second part in the
+    scan, seen from a viewpoint estimated from the first)."""
+    rng = np.random.default_rng(0)
+    part = rng.normal(size=(500, 3)) * 10.0
+    view = visibility.View(np.array([0.0, 0.0, 300.0]), np.zeros(3), 1.0)
+    beside = np.array([[400.0, 0.0, 299.0], [0.0, -400.0, 299.99]])
+    uv, _ = view.coordinates(np.r_[part, beside])
+    assert np.isfinite(uv[:500]).all() and np.isnan(uv[500:]).all()
+    scan = visibility.ScanView.of(np.r_[part, beside], view)
+    rows, cols = scan.view.shape
+    assert rows * cols < 10_000 and (scan.pixel[:500] >= 0).all() and (scan.pixel[500:] == -1).all()

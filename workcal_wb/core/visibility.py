@@ -39,6 +39,11 @@ FLAT_DEG = 3.0
 # A pixel's evidence: +weight for scan points on the visible model surface, HIDDEN for a scan point
 # the placed model would hide, MISSING for an empty footprint pixel where the model faces the sensor.
 HIDDEN, MISSING = -1.0, -1.0
+# A view sees this far off its axis (the tangent of 60 deg, wider than any scanner's field): a point
+# beyond, such as a second object beside the sensor, lies outside it, as one behind the viewpoint does
+# (its pixel coordinates grow without bound as it nears the sensor's plane: a window holding it asked
+# for hundreds of GB).
+MAX_OFF_AXIS = np.tan(np.radians(60.0))
 
 
 @dataclass
@@ -67,8 +72,9 @@ class View:
         local = (points - self.viewpoint) @ self.axes.T
         depth = local[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
-            uv = local[:, :2] / depth[:, None] * (self.distance / self.pixel_mm)
-        return np.where(depth[:, None] > 0, uv, np.nan), depth
+            off_axis = local[:, :2] / depth[:, None]
+            seen = (depth > 0) & (np.abs(off_axis) <= MAX_OFF_AXIS).all(axis=1)
+        return np.where(seen[:, None], off_axis * (self.distance / self.pixel_mm), np.nan), depth
 
     def framed(self, points: np.ndarray, margin: int = CLOSE_PIXELS + 1) -> "View":
         """This view with its window around the pixels of ``points`` (plus a margin)."""
