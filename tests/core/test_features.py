@@ -22,6 +22,14 @@ def _open3d_fpfh(points, normals, radius, max_nn=100):
     return np.asarray(o3d.pipelines.registration.compute_fpfh_feature(cloud, search).data).T
 
 
+def _curved_surface(count: int, seed: int):
+    rng = np.random.default_rng(seed)
+    u, v = rng.random((2, count)) * 20
+    points = np.column_stack([u, v, np.sin(u / 3) * 2])
+    normals = np.column_stack([-np.cos(u / 3) * 2 / 3, np.zeros_like(u), np.ones_like(u)])
+    return points, normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
 def test_a_cosine_rounded_past_one_is_no_error():
     features = fpfh(PAIR, ALONG, radius=1.0)
     assert features.shape == (2, 33) and np.isfinite(features).all()
@@ -29,20 +37,8 @@ def test_a_cosine_rounded_past_one_is_no_error():
 
 
 def test_fpfh_equals_open3ds_on_a_curved_surface():
-    rng = np.random.default_rng(4)
-    u, v = rng.random((2, 800)) * 20
-    points = np.column_stack([u, v, np.sin(u / 3) * 2])
-    normals = np.column_stack([-np.cos(u / 3) * 2 / 3, np.zeros_like(u), np.ones_like(u)])
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    points, normals = _curved_surface(800, 4)
     assert np.allclose(fpfh(points, normals, 3.0), _open3d_fpfh(points, normals, 3.0), atol=1e-9)
-
-
-def _curved_surface(count: int, seed: int):
-    rng = np.random.default_rng(seed)
-    u, v = rng.random((2, count)) * 20
-    points = np.column_stack([u, v, np.sin(u / 3) * 2])
-    normals = np.column_stack([-np.cos(u / 3) * 2 / 3, np.zeros_like(u), np.ones_like(u)])
-    return points, normals / np.linalg.norm(normals, axis=1)[:, None]
 
 
 def _lattice_with_ties():

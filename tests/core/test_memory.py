@@ -154,22 +154,16 @@ def test_the_support_plane_is_found_a_block_of_points_at_a_time(monkeypatch):
 
 def test_sample_cover_of_a_large_mesh_is_found_a_block_of_faces_at_a_time(monkeypatch):
     """A match's first far-off test asks how far the mesh lies from its samples: every face's corners at
-    once, and their copies, were 14 MB for 51k faces (57 MB for 200k: the peak of a match against a
+    once, and their copies, were 12 MB for 44k faces (57 MB for 200k: the peak of a match against a
     large model).  Faces without area (a segment each) are weighed in whichever block holds them."""
     from workcal_wb.core import surface as surface_module
+    from workcal_wb.core.simulate import shapes
 
-    k = 160
-    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, k, endpoint=False), np.linspace(0.05, np.pi - 0.05, k))
-    vertices = 50 * np.column_stack([np.cos(u).ravel() * np.sin(v).ravel(), np.sin(u).ravel() * np.sin(v).ravel(),
-                                     np.cos(v).ravel()])
-    ring = np.arange(k * k).reshape(k, k)
-    right = np.roll(ring, -1, axis=1)
-    triangles = np.r_[np.column_stack([ring[:-1].ravel(), right[:-1].ravel(), ring[1:].ravel()]),
-                      np.column_stack([right[:-1].ravel(), right[1:].ravel(), ring[1:].ravel()])]
+    sphere = shapes.sphere(50.0, edge_mm=1.5)  # 43,680 faces
     # A long segment (three corners on a line, across the sphere) in the first and the last block.
-    vertices = np.r_[vertices, [[-50.0, 0.0, 0.0], [0.0, 0.0, 0.0], [50.0, 0.0, 0.0]]]
+    vertices = np.r_[sphere.points, [[-50.0, 0.0, 0.0], [0.0, 0.0, 0.0], [50.0, 0.0, 0.0]]]
     segment = len(vertices) - 3 + np.arange(3)
-    triangles = np.r_[[segment], triangles, [segment[::-1]]]
+    triangles = np.r_[[segment], sphere.triangles, [segment[::-1]]]
     surface = SurfaceModel(Cloud(vertices, triangles=triangles, name="sphere"), 0)
     peak, cover = _traced_peak_mb(lambda: surface.sample_cover)
     assert peak < 8.0
