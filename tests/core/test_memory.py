@@ -170,3 +170,74 @@ def test_sample_cover_of_a_large_mesh_is_found_a_block_of_faces_at_a_time(monkey
     assert cover >= 50.0  # half the segment's length: its middle is that far from either end
     monkeypatch.setattr(surface_module, "COVER_BLOCK", 1000)
     assert type(surface).sample_cover.func(surface) == cover
+
+
+def test_shape_kind_of_a_large_scan_holds_no_copy_of_it(monkeypatch):
+    """Every match and every scene's region search first asks whether the scan spreads in three
+    directions: the scan centred whole was a copy of it (12 MB for 500k points, the largest temporary
+    at the start of a match of a large scene); now a block's.  Blocks tell the same kinds."""
+    from workcal_wb.core import geometry
+
+    points = _large_scan()
+    peak, kind = _traced_peak_mb(lambda: geometry.shape_kind(points))
+    assert kind == "solid" and peak < 0.35 * points.nbytes / 1e6  # two blocks at most (12 MB whole)
+    plane = points.copy()
+    plane[:, 2] = 0.0
+    line = np.outer(np.linspace(-1, 1, 100_001), [3.0, 4.0, 5.0]) + 7.0
+    kinds = [geometry.shape_kind(cloud) for cloud in (points, plane, line, np.zeros((100_000, 3)))]
+    assert kinds == ["solid", "planar", "linear", "point"]
+    monkeypatch.setattr(geometry, "SHAPE_BLOCK", 7)
+    assert [geometry.shape_kind(cloud) for cloud in (points, plane, line, np.zeros((100_000, 3)))] == kinds
+
+
+def test_the_freed_heap_is_handed_back_to_the_system():
+    """glibc keeps freed arrays smaller than its mmap threshold (which grows to the largest array freed so
+    far) in the heap, resident; a process that prepares a model and matches scan after scan carried each
+    step's high-water mark into the next.  In a fresh interpreter: 60 arrays of 1 MB freed between
+    arrays that stay are still resident until the heap is handed back."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = """
+import os
+import numpy as np
+from workcal_wb.core import pointops
+def resident_mb():
+    return int(open("/proc/self/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+np.ones(8 * 2**20 // 8).sum()  # an 8 MB array freed: glibc's threshold rises above 1 MB arrays
+kept, freed = [], []
+for _ in range(60):
+    freed.append(np.ones(2**20 // 8))
+    kept.append(np.ones(2**14))  # 128 kB between them: too large for a hole the imports left
+before = resident_mb()
+freed.clear()
+after_free = resident_mb()
+pointops.hand_back_freed_heap()
+print(before, after_free, resident_mb())
+"""
+    if not Path("/proc/self/statm").exists():
+        import pytest
+        pytest.skip("no /proc (not Linux)")
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", script], cwd=root, capture_output=True, text=True, check=True)
+    before, after_free, handed_back = map(float, out.stdout.split())
+    assert after_free > before - 10  # freed, but still resident
+    assert handed_back < after_free - 40
+
+
+def test_prepare_and_match_hand_back_the_heap_they_leave(monkeypatch):
+    """A model's preparation and each match free large temporaries: both hand the heap back when done."""
+    from workcal_wb.core import match as match_module
+    from workcal_wb.core import pointops
+
+    calls = []
+    monkeypatch.setattr(pointops, "hand_back_freed_heap", lambda: calls.append(1))
+    rng = np.random.default_rng(5)
+    u, v = rng.random((2, 3000)) * [[2 * np.pi], [np.pi]]
+    points = np.column_stack([30 * np.cos(u) * np.sin(v), 20 * np.sin(u) * np.sin(v), 10 * np.cos(v)])
+    surface = match_module.prepare(SurfaceModel(Cloud(points, name="ellipsoid")))
+    assert calls
+    calls.clear()
+    result = match_module.match(Cloud(points[points[:, 2] > -3] + [5.0, 0.0, 0.0], name="scan"), surface)
+    assert result.matrix is not None and calls

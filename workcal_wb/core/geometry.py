@@ -11,6 +11,7 @@ from .errors import InputError
 # No scanner measures a point 1000 km away: a coordinate beyond this is a corrupt value (1e308), and
 # kept it would overflow the geometry (squared distances, voxel indices) of every later step.
 MAX_COORDINATE_MM = 1e9
+SHAPE_BLOCK = 1 << 16  # points per block of shape_kind's scatter matrix
 
 
 @dataclass
@@ -222,8 +223,11 @@ def shape_kind(points: np.ndarray) -> str:
     """'solid', 'planar', 'linear' or 'point': a pose can only be fitted to a 'solid' spread."""
     if len(points) < 3:
         return "point"
-    centred = points - points.mean(axis=0)
-    s = np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred / len(points)), 0))[::-1]
+    mean, scatter = points.mean(axis=0), np.zeros((3, 3))
+    for start in range(0, len(points), SHAPE_BLOCK):  # a block's centred copy, not a large scan's
+        centred = points[start:start + SHAPE_BLOCK] - mean
+        scatter += centred.T @ centred
+    s = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter / len(points)), 0))[::-1]
     if s[0] <= 1e-9:
         return "point"
     if s[1] < 5e-3 * s[0]:

@@ -176,7 +176,9 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
     """
     options = _checked_options(replace(options, **overrides))
     with pointops.blas_threads(options.blas_threads):
-        return _match(scan, model, init, options)
+        result = _match(scan, model, init, options)
+    pointops.hand_back_freed_heap()  # scan after scan: each match's temporaries are not carried into the next
+    return result
 
 
 def match_pose(scan: Cloud, model, init: np.ndarray, options: MatchOptions = MatchOptions(),
@@ -200,6 +202,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                   tolerance_mm=options.tolerance_mm, n_scan_points=len(scan), seed=options.seed,
                   warnings=list(scan.warnings), timings_s=timer.phases)
     kind = shape_kind(scan.points)
+    pointops.hand_back_freed_heap()  # the whole scan's checks are done: their temporaries would stay resident
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                            reasons=[f"{scan.name}: the scan points are {kind}; they cannot fix a pose"])
@@ -289,6 +292,7 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
         voxel /= 1.25
     for level in range(2):  # gates up to 2 x GATE_CELLS spacings: 3 coarse voxels at the default voxel
         surface.grid_level(level).precompute()
+    pointops.hand_back_freed_heap()  # the building's temporaries: a kept model's process need not hold them
     return surface
 
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import frames
+from .. import frames, pointops
 from ..atomic import atomic_write_text
 
 WORKCAL, STOCK = "WorkCal", "Open3D stock"
@@ -146,16 +146,12 @@ def _run_method(method: str, folder: Path, seed: int, queue) -> None:
 
 
 def _hand_back_freed_memory() -> None:
-    """Return the heap that freed objects leave behind to the system (glibc keeps it otherwise, and a
-    process that matched one model would carry its high-water mark into the next model's)."""
-    import ctypes
+    """Free what is unreachable and return the heap it leaves to the system, so a process that matched
+    one model does not carry its high-water mark into the next model's."""
     import gc
 
     gc.collect()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc
-        pass
+    pointops.hand_back_freed_heap()
 
 
 def _run_gcode(queue) -> None:
