@@ -154,6 +154,11 @@ SETTLE_STEP_DEG = 15.0
 # scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
 # misplaced (or another object lies flush with the part): the match is ambiguous.
 MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
+# A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
+# MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
+MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
+CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 4.0
+CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS = 0.1, 8, 500
 # A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
 # spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
 THIN_PART = 0.05
@@ -737,6 +742,62 @@ class Judge:
                 kept.append(r)
         return kept
 
+    def continued_faces(self, T: np.ndarray) -> int:
+        """How many of the verdict's scan points lie off the model under pose T but in the plane of a
+        flat model face facing the sensor, beside the face and joined to it by points in that plane
+        (CONTINUED_LINK_SPACINGS scan spacings apart at most): the scanned face goes on past the placed
+        face's edge.  A pose that lays a face of the scan on a shorter face of the model leaves the rest
+        of it so; the pixel test of visibility.evidence needs scan pixels next to the outline, which the
+        rows of a sparse scan leave empty.  Clutter beside a part seldom lies in the plane of its faces."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+        from scipy.spatial import cKDTree
+
+        surface = self.surface
+        if self.view is None:
+            return 0
+        moved = frames.apply(T, self.all_points)
+        distance = surface.tree.query(moved)[0]  # exact: a grid's cell may name a farther sample at an edge
+        off = np.flatnonzero(distance > self.gate + surface.spacing)
+        spacing = max(self.all_spacing, surface.spacing)
+        reach = self.gate + CONTINUED_REACH_SPACINGS * spacing
+        beside = off[distance[off] <= reach] if len(off) >= MIN_CONTINUED_POINTS else off[:0]
+        if len(beside) == 0:
+            return 0
+        beside = beside[::-(-len(beside) // CONTINUED_SEEDS)]  # enough to seed any run worth a reason
+        # (point, sample) pairs within reach where the sample's tangent plane holds the point.
+        lists = surface.tree.query_ball_point(moved[beside], reach)
+        point = np.repeat(beside, [len(found) for found in lists])
+        sample = np.fromiter((j for found in lists for j in found), np.int64, len(point))
+        normals = surface.normals[sample]
+        held = np.abs(np.einsum("ij,ij->i", moved[point] - surface.points[sample], normals)) <= self.gate
+        point, sample = point[held], sample[held]
+        faces = np.unique(sample)
+        towards = visibility.facing(frames.apply(frames.invert(T), surface.points[faces]),
+                                    surface.normals[faces] @ T[:3, :3], self.viewpoint)
+        usable = surface.flat(faces, CONTINUED_FLAT_SPACINGS * surface.spacing) & (towards > CONTINUED_FACING_COS)
+        usable = usable[np.searchsorted(faces, sample)]
+        point, sample = point[usable], sample[usable]
+        if len(point) == 0:
+            return 0
+        # One pass per plane (a face's samples share one up to rounding).
+        normals = surface.normals[sample]
+        offsets = np.einsum("ij,ij->i", normals, surface.points[sample])
+        planes = np.column_stack([np.round(normals / np.radians(visibility.FLAT_DEG)), np.round(offsets / self.gate)])
+        _, first, plane_of = np.unique(planes, axis=0, return_index=True, return_inverse=True)
+        link = CONTINUED_LINK_SPACINGS * self.all_spacing
+        continued = np.zeros(len(moved), bool)
+        for plane in np.argsort(-np.bincount(plane_of.ravel()))[:CONTINUED_PLANES]:
+            seeds = point[plane_of.ravel() == plane]
+            j = sample[first[plane]]
+            on_plane = np.union1d(off[np.abs((moved[off] - surface.points[j]) @ surface.normals[j]) <= self.gate], seeds)
+            pairs = cKDTree(moved[on_plane]).query_pairs(link, output_type="ndarray")
+            graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(on_plane),) * 2)
+            labels = connected_components(graph, directed=False)[1]
+            seeded = np.isin(labels, labels[np.searchsorted(on_plane, seeds)])
+            continued[on_plane[seeded]] = True
+        return int(continued.sum())
+
     def _lookup(self, T: np.ndarray):
         """(nearest model sample, found, |point-to-plane residual|) of each sample point under T."""
         moved = frames.apply(T, self.sample)
@@ -1033,6 +1094,12 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         reasons.append(f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
                        f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
                        "or something lies flush with the part there")
+    continued = judge.continued_faces(T) if status == OK else 0
+    if continued >= MIN_CONTINUED_POINTS and continued > MAX_CONTINUED_POINTS * len(judge.all_points):
+        reasons.append(f"{continued} scan points ({continued / len(judge.all_points):.0%}) lie off the placed model in "
+                       "the plane of a face of it that they run on from: the scanned face goes on past the model's "
+                       "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
+                       "flush with the part)")
     if status == OK and not stab["constrained"]:
         reasons.append("the matched surface does not fix every motion (under-constrained): free "
                        + "; ".join(stab["free_motions"]))

@@ -20,6 +20,7 @@ from scipy.spatial import cKDTree
 from . import pointops
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
+from .visibility import FLAT_DEG
 
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
 # the query point (so residuals are exact), coarse enough to keep the tree ~100k samples.
@@ -610,6 +611,16 @@ class SurfaceModel:
         normals = np.full((len(face), 3), np.nan)
         normals[known] = self.face_normals[face[known].astype(np.int64)]
         return answer["points"].astype(float) + self._bvh[2], normals
+
+    def flat(self, samples: np.ndarray, radius: float) -> np.ndarray:
+        """Mask of the ``samples`` (indices) on a flat face: the normals of every sample within ``radius``
+        mm agree with theirs within FLAT_DEG (near a face's edge, or on a surface curved by more than
+        FLAT_DEG over ``radius``, they do not)."""
+        near = self.tree.query_ball_point(self.points[samples], radius)
+        owner = np.repeat(np.arange(len(samples)), [len(found) for found in near])
+        other = np.fromiter((j for found in near for j in found), np.int64, len(owner))
+        agree = np.einsum("ij,ij->i", self.normals[other], self.normals[samples][owner]) >= np.cos(np.radians(FLAT_DEG))
+        return np.bincount(owner, ~agree, minlength=len(samples)) == 0
 
     @cached_property
     def sample_cover(self) -> float:
