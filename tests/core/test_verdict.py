@@ -359,6 +359,38 @@ def test_rows_of_the_right_plate_leave_no_face_running_on():
     assert result.status == "ok" and right(surface, result.matrix, motion), result.reasons
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_low_noise_scan_of_the_right_pose_runs_on_past_no_face(seed):
+    """A box seen with 0.01 mm of noise: some points of its faces lie farther than a sample spacing
+    from every (randomly placed) mesh sample, and the first test of scan running on past a face
+    counted them off the model, in the plane of their face: 106 points (4 %) at the right pose.
+    Off now means farther than any point of the mesh can be from its samples (sample_cover)."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    mesh = shapes.box((100.0, 60.0, 40.0), edge_mm=10.0)
+    surface = SurfaceModel(mesh, 0)
+    points, truth = _view(mesh, seed, noise=0.01)
+    result = match(Cloud(points, name="box"), surface, tolerance_mm=0.3, seed=0)
+    assert right(surface, result.matrix, truth)
+    assert not any("past the model's edge" in reason for reason in result.reasons), result.reasons
+
+
+def test_a_point_model_is_not_weighed_by_faces_it_does_not_have():
+    """An L-block given as points with normals (no faces, so no bound on the gaps its samples leave):
+    half the scan points of its right pose lie farther than a spacing from every sample, and were
+    counted as running on past its faces (21 %, "ambiguous"); a point model is not weighed so."""
+    from workcal_wb.core import pointops
+    from workcal_wb.core.benchmark.verdicts import right
+
+    mesh = shapes.l_block()
+    points, faces = pointops.sample_triangles(mesh.points, mesh.triangles, 0.8, seed=1)
+    normals = pointops.triangle_normals_and_areas(mesh.points, mesh.triangles)[0][faces]
+    surface = SurfaceModel(Cloud(points, normals, name="L-block points"), 0)
+    scan, truth = _view(mesh, 1, noise=0.05)
+    result = match(Cloud(scan, name="L-block"), surface, tolerance_mm=0.3, seed=0)
+    assert result.status == "ok" and right(SurfaceModel(mesh, 0), result.matrix, truth), result.reasons
+
+
 def test_flat_samples_are_those_inside_a_flat_face():
     """SurfaceModel.flat: a plate's samples in the middle of its faces are flat, those along its edges
     are not, and none of a sphere's where it turns by more than FLAT_DEG over the radius asked."""

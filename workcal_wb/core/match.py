@@ -157,8 +157,16 @@ MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
 # A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
 # MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
 MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
-CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 4.0
-CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS = 0.1, 8, 500
+# A face is flat where its samples' normals agree over CONTINUED_FLAT_SPACINGS model spacings (its edge
+# band is that wide); points beside it lie within CONTINUED_REACH_SPACINGS scan spacings of the mesh
+# (a sparse scan's first point past an edge), weighed against the samples within at most
+# CONTINUED_REACH_SAMPLES model spacings (~450 samples each, for at most CONTINUED_SEEDS points: a
+# scan far sparser than the model asked for millions of pairs); runs of points in a plane are joined
+# across gaps of CONTINUED_LINK_SPACINGS scan spacings.  A face faces the sensor when its normal is
+# within 84 deg of the direction to it (a side face seen grazing counts; the view's own test,
+# visibility.FACING_COS, lets samples a little past grazing into the z-buffer).
+CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_REACH_SAMPLES, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 12.0, 4.0
+CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS = 0.1, 8, 200
 # A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
 # spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
 THIN_PART = 0.05
@@ -743,24 +751,32 @@ class Judge:
         return kept
 
     def continued_faces(self, T: np.ndarray) -> int:
-        """How many of the verdict's scan points lie off the model under pose T but in the plane of a
-        flat model face facing the sensor, beside the face and joined to it by points in that plane
+        """How many of the verdict's scan points lie off a mesh model under pose T but in the plane of a
+        flat face of it facing the sensor, beside the face and joined to it by points in that plane
         (CONTINUED_LINK_SPACINGS scan spacings apart at most): the scanned face goes on past the placed
         face's edge.  A pose that lays a face of the scan on a shorter face of the model leaves the rest
         of it so; the pixel test of visibility.evidence needs scan pixels next to the outline, which the
-        rows of a sparse scan leave empty.  Clutter beside a part seldom lies in the plane of its faces."""
+        rows of a sparse scan leave empty.  Clutter beside a part seldom lies in the plane of its faces.
+        Off means farther from every sample than any point of the mesh can be (sample_cover): a point
+        model has no such bound (its samples leave gaps), so it is not weighed so, nor a scan without
+        a viewpoint (views merged into one cloud)."""
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
         from scipy.spatial import cKDTree
 
         surface = self.surface
-        if self.view is None:
+        if self.view is None or not surface.is_mesh:
             return 0
         moved = frames.apply(T, self.all_points)
-        distance = surface.tree.query(moved)[0]  # exact: a grid's cell may name a farther sample at an edge
-        off = np.flatnonzero(distance > self.gate + surface.spacing)
-        spacing = max(self.all_spacing, surface.spacing)
-        reach = self.gate + CONTINUED_REACH_SPACINGS * spacing
+        distance = surface.tree.query(moved)[0]
+        off = np.flatnonzero(distance > self.gate + surface.sample_cover)
+        # In a face's plane: within the gate, or a third of the tolerance where the noise is below it (an
+        # exact scan's gate is 1e-6 mm, less than a found pose's own error).
+        margin = max(self.gate, self.options.tolerance_mm / 3)
+        # Beside the model: within a few scan spacings (the rows of a sparse scan), at most
+        # CONTINUED_REACH_SAMPLES model spacings (the samples weighed per point).
+        reach = self.gate + surface.sample_cover + min(CONTINUED_REACH_SPACINGS * self.all_spacing,
+                                                        CONTINUED_REACH_SAMPLES * surface.spacing)
         beside = off[distance[off] <= reach] if len(off) >= MIN_CONTINUED_POINTS else off[:0]
         if len(beside) == 0:
             return 0
@@ -770,27 +786,27 @@ class Judge:
         point = np.repeat(beside, [len(found) for found in lists])
         sample = np.fromiter((j for found in lists for j in found), np.int64, len(point))
         normals = surface.normals[sample]
-        held = np.abs(np.einsum("ij,ij->i", moved[point] - surface.points[sample], normals)) <= self.gate
+        held = np.abs(np.einsum("ij,ij->i", moved[point] - surface.points[sample], normals)) <= margin
         point, sample = point[held], sample[held]
-        faces = np.unique(sample)
-        towards = visibility.facing(frames.apply(frames.invert(T), surface.points[faces]),
-                                    surface.normals[faces] @ T[:3, :3], self.viewpoint)
-        usable = surface.flat(faces, CONTINUED_FLAT_SPACINGS * surface.spacing) & (towards > CONTINUED_FACING_COS)
-        usable = usable[np.searchsorted(faces, sample)]
+        samples = np.unique(sample)
+        towards = visibility.facing(frames.apply(frames.invert(T), surface.points[samples]),
+                                    surface.normals[samples] @ T[:3, :3], self.viewpoint)
+        usable = surface.flat(samples, CONTINUED_FLAT_SPACINGS * surface.spacing) & (towards > CONTINUED_FACING_COS)
+        usable = usable[np.searchsorted(samples, sample)]
         point, sample = point[usable], sample[usable]
         if len(point) == 0:
             return 0
         # One pass per plane (a face's samples share one up to rounding).
         normals = surface.normals[sample]
         offsets = np.einsum("ij,ij->i", normals, surface.points[sample])
-        planes = np.column_stack([np.round(normals / np.radians(visibility.FLAT_DEG)), np.round(offsets / self.gate)])
+        planes = np.column_stack([np.round(normals / np.radians(visibility.FLAT_DEG)), np.round(offsets / margin)])
         _, first, plane_of = np.unique(planes, axis=0, return_index=True, return_inverse=True)
         link = CONTINUED_LINK_SPACINGS * self.all_spacing
         continued = np.zeros(len(moved), bool)
         for plane in np.argsort(-np.bincount(plane_of.ravel()))[:CONTINUED_PLANES]:
             seeds = point[plane_of.ravel() == plane]
             j = sample[first[plane]]
-            on_plane = np.union1d(off[np.abs((moved[off] - surface.points[j]) @ surface.normals[j]) <= self.gate], seeds)
+            on_plane = np.union1d(off[np.abs((moved[off] - surface.points[j]) @ surface.normals[j]) <= margin], seeds)
             pairs = cKDTree(moved[on_plane]).query_pairs(link, output_type="ndarray")
             graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(on_plane),) * 2)
             labels = connected_components(graph, directed=False)[1]
