@@ -404,6 +404,24 @@ def test_flat_samples_are_those_inside_a_flat_face():
     assert not sphere.flat(np.arange(len(sphere.points)), 5.0).any()  # 5.7 deg over 5 mm
 
 
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="known defect (stop 26): a part on a table matched in the whole scene comes back 'ok' "
+                          "upside down; remove this mark once it is fixed")
+@pytest.mark.parametrize("name, model", [("l-block", shapes.l_block), ("plate", shapes.plate)])
+def test_a_part_on_a_table_is_not_ok_upside_down(name, model):
+    """A part standing on a table that reaches past it, its bottom face in the table's plane, matched in
+    the whole scene (no regions, no viewpoint): the pose that lays the part's top face on the table is
+    reported "ok" half a turn from the truth; the viewpoint estimated from that pose lies under the table,
+    so the table running on past the top face's edge counts for nothing.  Found by a tester (helper)
+    checking the face-continuation test; the scans are stored."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{name}-on-table.npz")
+    surface = SurfaceModel(model(), 0)
+    result = match(Cloud(data["scan"].astype(float), name=f"{name} on a table"), surface, tolerance_mm=0.3, seed=0)
+    assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.reasons
+
+
 def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     """Two chamfered pegs in one scan, the second half a turn round and 300 mm away: the viewpoint the
     verdict estimates from the matched copy put the other nearly in the sensor's plane, and framing the
