@@ -158,13 +158,17 @@ def test_a_block_partly_hidden_by_the_workpiece_it_touches_is_held_by_its_edges(
 def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_ok():
     """Clay joining the objects, seen so that the L-block turned half round stands on the platform and
     explains 2285 of its 3077 points: that pose was reported ok, 180 deg off.  The points of the
-    joined objects on neither model (1090) say the split may be wrong."""
+    joined objects on neither model (1090) say the split may be wrong.  Since the face-continuation test
+    (Judge.continued_faces) this scene's W is right but "ambiguous": the viewpoint the verdict estimates
+    for the block lies under the platform, and clay on the platform runs on in the plane of the block's
+    bottom face (a right pose made ambiguous, a known cost of that test; not a wrong "ok")."""
     cell = cell_scan(CellSpec(layout="bridge", frame="arbitrary", seed=1003))
     result = _calibrated(cell, seed=1)  # as the scenes table's second seed set ran it
     if result.status == "ok":
         assert _errors(result.W, cell.W, cell.workpiece_model)[1] < 0.3
     else:
-        assert any("lie on neither placed model" in r for r in result.reasons), result.reasons
+        assert any("lie on neither placed model" in r or "past the model's edge" in r for r in result.reasons), \
+            result.reasons
 
 
 @pytest.mark.parametrize("seed", [0, 4])
