@@ -159,14 +159,14 @@ MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
 MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
 # A face is flat where its samples' normals agree over CONTINUED_FLAT_SPACINGS model spacings (its edge
 # band is that wide); points beside it lie within CONTINUED_REACH_SPACINGS scan spacings of the mesh
-# (a sparse scan's first point past an edge), weighed against the samples within at most
-# CONTINUED_REACH_SAMPLES model spacings (~450 samples each, for at most CONTINUED_SEEDS points: a
+# (a sparse scan's first point past an edge) and at most CONTINUED_REACH_SAMPLES model spacings, each
+# weighed against its CONTINUED_SAMPLES nearest samples there, for at most CONTINUED_SEEDS points (a
 # scan far sparser than the model asked for millions of pairs); runs of points in a plane are joined
 # across gaps of CONTINUED_LINK_SPACINGS scan spacings.  A face faces the sensor when its normal is
 # within 84 deg of the direction to it (a side face seen grazing counts; the view's own test,
 # visibility.FACING_COS, lets samples a little past grazing into the z-buffer).
 CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_REACH_SAMPLES, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 12.0, 4.0
-CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS = 0.1, 8, 200
+CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS, CONTINUED_SAMPLES = 0.1, 8, 200, 256
 # A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
 # spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
 THIN_PART = 0.05
@@ -781,10 +781,11 @@ class Judge:
         if len(beside) == 0:
             return 0
         beside = beside[::-(-len(beside) // CONTINUED_SEEDS)]  # enough to seed any run worth a reason
-        # (point, sample) pairs within reach where the sample's tangent plane holds the point.
-        lists = surface.tree.query_ball_point(moved[beside], reach)
-        point = np.repeat(beside, [len(found) for found in lists])
-        sample = np.fromiter((j for found in lists for j in found), np.int64, len(point))
+        # (point, sample) pairs, its CONTINUED_SAMPLES nearest samples within reach, where the sample's
+        # tangent plane holds the point.
+        near = surface.tree.query(moved[beside], CONTINUED_SAMPLES, distance_upper_bound=reach)[1]
+        found = near < len(surface.points)
+        point, sample = np.broadcast_to(beside[:, None], near.shape)[found], near[found]
         normals = surface.normals[sample]
         held = np.abs(np.einsum("ij,ij->i", moved[point] - surface.points[sample], normals)) <= margin
         point, sample = point[held], sample[held]

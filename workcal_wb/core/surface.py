@@ -42,6 +42,7 @@ FILL_CHUNK = 1 << 15
 # live at once: ~60 bytes a cell; 2^18 made the figurine's finest grid peak 28 MB traced, 2^16 22 MB,
 # the same cells filled).
 NEAR_SLAB_CELLS = 1 << 16
+FLAT_NEIGHBOURS, FLAT_BLOCK = 16, 1 << 12  # SurfaceModel.flat
 # sample_cover weighs this many faces at a time (~300 bytes a face at once).
 COVER_BLOCK = 1 << 13
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
@@ -613,14 +614,18 @@ class SurfaceModel:
         return answer["points"].astype(float) + self._bvh[2], normals
 
     def flat(self, samples: np.ndarray, radius: float) -> np.ndarray:
-        """Mask of the ``samples`` (indices) on a flat face: the normals of every sample within ``radius``
-        mm agree with theirs within FLAT_DEG (near a face's edge, or on a surface curved by more than
-        FLAT_DEG over ``radius``, they do not)."""
-        near = self.tree.query_ball_point(self.points[samples], radius)
-        owner = np.repeat(np.arange(len(samples)), [len(found) for found in near])
-        other = np.fromiter((j for found in near for j in found), np.int64, len(owner))
-        agree = np.einsum("ij,ij->i", self.normals[other], self.normals[samples][owner]) >= np.cos(np.radians(FLAT_DEG))
-        return np.bincount(owner, ~agree, minlength=len(samples)) == 0
+        """Mask of the ``samples`` (indices) on a flat face: the normals of their FLAT_NEIGHBOURS nearest
+        samples within ``radius`` mm agree with theirs within FLAT_DEG (near a face's edge they do not;
+        a smooth surface sampled finely may pass, see Judge.continued_faces).  A block of samples at a
+        time: their neighbours' normals are 400 bytes a sample."""
+        flat, cos = np.empty(len(samples), bool), np.cos(np.radians(FLAT_DEG))
+        for start in range(0, len(samples), FLAT_BLOCK):
+            part = samples[start:start + FLAT_BLOCK]
+            near = self.tree.query(self.points[part], FLAT_NEIGHBOURS, distance_upper_bound=radius)[1]
+            found = near < len(self.points)
+            agree = np.einsum("ikj,ij->ik", self.normals[np.where(found, near, 0)], self.normals[part]) >= cos
+            flat[start:start + FLAT_BLOCK] = (agree | ~found).all(axis=1)
+        return flat
 
     @cached_property
     def sample_cover(self) -> float:
