@@ -402,8 +402,9 @@ def test_flat_samples_are_those_inside_a_flat_face():
     assert plate.flat(middle, 2.0).all() and not plate.flat(edge, 2.0).any()
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="known defect (stop 26): a part on a table matched in the whole scene comes back 'ok' "
+@pytest.mark.xfail(np.__version__.startswith("1."), strict=True, raises=AssertionError,
+                   reason="known defect (stop 26) on Debian 12's numpy and scipy (on Debian 13's the same scans "
+                          "come out otherwise): a part on a table matched in the whole scene comes back 'ok' "
                           "upside down; remove this mark once it is fixed")
 @pytest.mark.parametrize("name, model", [("l-block", shapes.l_block), ("plate", shapes.plate)])
 def test_a_part_on_a_table_is_not_ok_upside_down(name, model):
