@@ -759,7 +759,9 @@ class Judge:
         rows of a sparse scan leave empty.  Clutter beside a part seldom lies in the plane of its faces.
         Off means farther from every sample than any point of the mesh can be (sample_cover): a point
         model has no such bound (its samples leave gaps), so it is not weighed so, nor a scan without
-        a viewpoint (views merged into one cloud)."""
+        a viewpoint (views merged into one cloud).  A finely sampled curved surface may pass as flat
+        (SurfaceModel.flat is local), but points on its tangent plane lie off it only farther out than
+        the reach unless it curves little."""
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
         from scipy.spatial import cKDTree
