@@ -353,7 +353,8 @@ def test_rows_of_the_right_plate_leave_no_face_running_on():
 
     rng = np.random.default_rng(1)
     surface = SurfaceModel(shapes.plate(), 0)
-    points = _plate_rows() + rng.normal(0, 0.02, (len(_plate_rows()), 3))
+    points = _plate_rows()
+    points = points + rng.normal(0, 0.02, points.shape)
     motion = frames.from_euler_zyz(*rng.uniform(-180, 180, 3), translation=rng.uniform(-500, 500, 3))
     result = match(Cloud(frames.apply(motion, points), name="plate rows"), surface, tolerance_mm=0.3, seed=0)
     assert result.status == "ok" and right(surface, result.matrix, motion), result.reasons

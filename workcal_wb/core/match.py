@@ -772,6 +772,8 @@ class Judge:
         moved = frames.apply(T, self.all_points)
         distance = surface.tree.query(moved)[0]
         off = np.flatnonzero(distance > self.gate + surface.sample_cover)
+        if len(off) < MIN_CONTINUED_POINTS:
+            return 0
         # In a face's plane: within the gate, or a third of the tolerance where the noise is below it (an
         # exact scan's gate is 1e-6 mm, less than a found pose's own error).
         margin = max(self.gate, self.options.tolerance_mm / 3)
@@ -779,7 +781,7 @@ class Judge:
         # CONTINUED_REACH_SAMPLES model spacings (the samples weighed per point).
         reach = self.gate + surface.sample_cover + min(CONTINUED_REACH_SPACINGS * self.all_spacing,
                                                         CONTINUED_REACH_SAMPLES * surface.spacing)
-        beside = off[distance[off] <= reach] if len(off) >= MIN_CONTINUED_POINTS else off[:0]
+        beside = off[distance[off] <= reach]
         if len(beside) == 0:
             return 0
         beside = beside[::-(-len(beside) // CONTINUED_SEEDS)]  # enough to seed any run worth a reason
@@ -790,17 +792,16 @@ class Judge:
         point, sample = np.broadcast_to(beside[:, None], near.shape)[found], near[found]
         normals = surface.normals[sample]
         held = np.abs(np.einsum("ij,ij->i", moved[point] - surface.points[sample], normals)) <= margin
-        point, sample = point[held], sample[held]
+        point, sample, normals = point[held], sample[held], normals[held]
         samples = np.unique(sample)
         towards = visibility.facing(frames.apply(frames.invert(T), surface.points[samples]),
                                     surface.normals[samples] @ T[:3, :3], self.viewpoint)
         usable = surface.flat(samples, CONTINUED_FLAT_SPACINGS * surface.spacing) & (towards > CONTINUED_FACING_COS)
         usable = usable[np.searchsorted(samples, sample)]
-        point, sample = point[usable], sample[usable]
+        point, sample, normals = point[usable], sample[usable], normals[usable]
         if len(point) == 0:
             return 0
         # One pass per plane (a face's samples share one up to rounding).
-        normals = surface.normals[sample]
         offsets = np.einsum("ij,ij->i", normals, surface.points[sample])
         planes = np.column_stack([np.round(normals / np.radians(visibility.FLAT_DEG)), np.round(offsets / margin)])
         _, first, plane_of = np.unique(planes, axis=0, return_index=True, return_inverse=True)
