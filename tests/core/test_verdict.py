@@ -410,10 +410,13 @@ def test_flat_samples_are_those_inside_a_flat_face():
 @pytest.mark.parametrize("name, model", [("l-block", shapes.l_block), ("plate", shapes.plate)])
 def test_a_part_on_a_table_is_not_ok_upside_down(name, model):
     """A part standing on a table that reaches past it, its bottom face in the table's plane, matched in
-    the whole scene (no regions, no viewpoint): the pose that lays the part's top face on the table is
-    reported "ok" half a turn from the truth; the viewpoint estimated from that pose lies under the table,
-    so the table running on past the top face's edge counts for nothing.  Found by a tester (helper)
-    checking the face-continuation test; the scans are stored."""
+    the whole scene (no regions, no viewpoint): a pose half a turn from the truth is reported "ok".
+    Measured (stop 27): the L-block's viewpoint, estimated from that pose, lies under the table, nearly
+    in its plane (66 mm below the scan's centre, 580 mm from it; over 80 % of the scan would hide
+    behind other scan points from there), so the table running on past the face laid in its plane
+    counts for nothing; the plate's matched surface faces every way (no viewpoint, no visibility), and
+    the search never proposed its right pose (its best was the right way up but slid 37 mm along the
+    table).  Found by a tester (helper) checking the face-continuation test; the scans are stored."""
     from workcal_wb.core.benchmark.verdicts import right
 
     data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{name}-on-table.npz")

@@ -297,7 +297,7 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
     gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
-    centres = [surface.points.mean(axis=0) for surface in surfaces]  # what each nudge turns about (once, not per refit)
+    centres = [surface.points.mean(axis=0) for surface in surfaces]  # the nudges turn each model about its centre
     # Two threads only with BLAS held to one (FreeCAD's workers leave BLAS alone: its own threads would spin).
     threads = REFIT_THREADS if options.blas_threads == 1 else 1
     refits = []

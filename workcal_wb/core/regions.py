@@ -264,18 +264,22 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
 
 def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict) -> MatchResult:
     """The match on a final region, started from the pose found while locating it; its candidates
-    and ambiguity come from the global search that found it.  When the refit's verdict left that pose
-    for another (a turn of it), the search's doubts were about the pose left, and its reasons say so
-    (in one reason, which the physical checks do not clear as a tie of this pose): the region was cut
-    by that pose, so a search of the region alone cannot settle which one it is (it finds the pose that
-    cut it)."""
+    and ambiguity come from the global search that found it.  When the refit's verdict moved to
+    another pose, the search's doubts were about the first one, and the one reason kept says so: the
+    region's points were picked with the first pose, so a search of them alone cannot settle it (it
+    finds the pose that picked them), and the physical checks, which weigh the first pose's rivals,
+    do not clear it as a tie."""
     again = match(cloud, surface, init=found.matrix, **options)
     if again.status == OK and found.status == AMBIGUOUS:
         reasons = found.reasons
         if not _same_pose(again, found, surface):
-            turned = frames.rotation_between_deg(again.matrix, found.matrix)
-            reasons = [f"the search that found this object placed it {turned:.0f} deg from this pose, and was not sure "
-                       f"of that pose ({'; '.join(found.reasons)}); this pose, started from it, may not be sure either"]
+            centre = surface.points.mean(axis=0)
+            turned_deg = frames.rotation_between_deg(again.matrix, found.matrix)
+            shift_mm = float(np.linalg.norm(frames.apply(again.matrix, centre) - frames.apply(found.matrix, centre)))
+            reasons = [f"this pose was refined from a first pose {turned_deg:.0f} deg and {shift_mm:.0f} mm away whose "
+                       f"search was in doubt [{'; '.join(found.reasons)}], and the points it was fitted to were "
+                       "picked with that first pose, so the doubt stands: check the pose in the 3D view, or scan "
+                       "the objects apart or give the regions"]
         again.status, again.reasons, again.candidates, again.ties = AMBIGUOUS, reasons, found.candidates, found.ties
     again.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **again.timings_s}
     again.time_s += found.time_s
