@@ -429,6 +429,50 @@ def test_a_part_on_a_table_is_not_ok_upside_down(name, model):
     assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.reasons
 
 
+def _standing(mesh: Cloud) -> Cloud:
+    """``mesh`` moved to stand on z = 0, centred in x and y (as the tester placed the parts on the slab)."""
+    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    return Cloud(mesh.points - [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]], triangles=mesh.triangles,
+                 name=mesh.name)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_right_pose_is_not_judged_by_the_view_a_rival_implies(seed):
+    """An L-block on a slab 60 mm wider, seen from 45 deg above (0.1 mm noise), seed 1 on Debian 12: the
+    poses were weighed from the viewpoint the pose with the most points on the model implies, a rival
+    90 deg off with its faces in the slab's plane, from which 76 % of the scan hides behind other scan
+    points.  The right pose won, and was made "ambiguous" by that share, which is the rival's: from its
+    own implied viewpoint 3-6 % hides.  The share is now the reported pose's own.  The other seeds (and
+    every seed on Debian 13) report the block upside down: not "ok" (73-76 % hidden from its view).
+    Found by a tester (helper)."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / "l-block-on-slab-45deg.npz")
+    surface = SurfaceModel(_standing(shapes.l_block()), 0)
+    result = match(Cloud(data["scan"].astype(float), name="L-block on a slab"), surface, tolerance_mm=0.3, seed=seed)
+    if right(surface, result.matrix, data["truth"]):
+        assert result.status == "ok", result.reasons
+    else:
+        assert result.status != "ok" and any("behind other scan points" in r for r in result.reasons), result.reasons
+
+
+@pytest.mark.xfail(np.__version__.startswith("1."), strict=True, raises=AssertionError,
+                   reason="known defect (stop 27) on Debian 12's numpy and scipy (Debian 13's do not lay the shell "
+                          "so): a shell on a slab comes back 'ok' turned 2 deg and slid 3 mm along its own curvature; "
+                          "remove this mark once it is fixed")
+def test_a_shell_on_a_slab_is_not_ok_slid_along_its_curvature():
+    """``shapes.shell()`` on a slab 60 mm wider, seen from 25 deg above, exact: "ok" at a pose turned
+    2.0 deg about its bend and shifted 3.1 mm (4.0 mm at its farthest point), at a 0.3 mm tolerance.
+    The view cannot tell (the estimated viewpoint hides 0.5 % of the scan from itself).  Found by a
+    tester (helper); the scan is stored."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / "shell-on-slab-25deg.npz")
+    surface = SurfaceModel(_standing(shapes.shell()), 0)
+    result = match(Cloud(data["scan"].astype(float), name="shell on a slab"), surface, tolerance_mm=0.3, seed=0)
+    assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.reasons
+
+
 def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     """Two chamfered pegs in one scan, the second half a turn round and 300 mm away: the viewpoint the
     verdict estimates from the matched copy put the other nearly in the sensor's plane, and framing the
