@@ -1153,11 +1153,10 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        "flush with the part)")
     hidden = judge.hidden_from_implied_view(T) if status == OK and judge.source.startswith("estimated") else 0.0
     if hidden > MAX_SELF_HIDDEN:
-        reasons.append(f"from the viewpoint estimated from the faces the pose lays on the scan, "
-                       f"{hidden:.0%} of the scan's points would lie behind other scan points (at most "
-                       f"{MAX_SELF_HIDDEN:.0%}): the "
-                       "scan was not taken from there, so its view cannot be trusted and those faces may face away "
-                       "from the scanner (a part upside down on a table it stands on); give the scanner's position "
+        reasons.append(f"from the viewpoint estimated from the faces the pose lays on the scan, {hidden:.0%} of the "
+                       f"scan's points would lie behind other scan points (at most {MAX_SELF_HIDDEN:.0%}): the scan "
+                       "was not taken from there, so its view cannot be trusted and those faces may face away from "
+                       "the scanner (a part upside down on a table it stands on); give the scanner's position "
                        "(viewpoint) or the part's region")
     if status == OK and not stab["constrained"]:
         reasons.append("the matched surface does not fix every motion (under-constrained): free "
