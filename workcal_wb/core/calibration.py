@@ -297,7 +297,6 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
     gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
-    centres = [surface.points.mean(axis=0) for surface in surfaces]  # the nudges turn each model about its centre
     # Two threads only with BLAS held to one (FreeCAD's workers leave BLAS alone: its own threads would spin).
     threads = REFIT_THREADS if options.blas_threads == 1 else 1
     refits = []
@@ -306,9 +305,9 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         # pool at once: a thread that finishes its refit starts the next without waiting for the other's.
         for first in range(0, options.resamples, DRAWN_AT_ONCE):
             jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
-                     m.matrix @ _nudge(surface, centre, options.tolerance_mm / 2, rng), gate, options, match_options)
+                     m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
                     for _ in range(min(DRAWN_AT_ONCE, options.resamples - first))
-                    for role, surface, centre, m, gate in zip(roles, surfaces, centres, matches, gates)]
+                    for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
             refits += pool.map(lambda job: _refit_pose(*job), jobs)
     rotations = []
     for U_r, V_r in zip(refits[0::2], refits[1::2]):
@@ -340,9 +339,10 @@ def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, ga
     return frames.invert(refine_given(state, medium, points, surface, options.tolerance_mm).T)
 
 
-def _nudge(surface: SurfaceModel, centre: np.ndarray, size_mm: float, rng: np.random.Generator) -> np.ndarray:
+def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> np.ndarray:
     """A random rigid motion (model frame) moving the model's points by about ``size_mm``: a turn
-    about ``centre`` (its samples' mean) that moves its edge by that much, and a shift of that size."""
+    about its centre that moves its edge by that much, and a shift of that size."""
+    centre = surface.centre
     axis = rng.normal(size=3)
     angle = np.degrees(size_mm / (surface.diagonal / 2))
     turn = frames.rigid(frames.from_rotvec(np.radians(angle) * axis / np.linalg.norm(axis))[:3, :3])

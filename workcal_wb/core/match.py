@@ -1186,7 +1186,7 @@ def _far_off_words(candidate: dict) -> str:
 def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
     """The poses weighed, best first, as the result lists them (U of each and how it compares)."""
     best_score = judged[0]["evidence"].score
-    centre = surface.points.mean(axis=0)
+    centre = surface.centre
     listed = []
     for entry in judged:
         Tc, evidence = entry["T"], entry["evidence"]

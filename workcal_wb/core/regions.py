@@ -273,9 +273,9 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
     if again.status == OK and found.status == AMBIGUOUS:
         reasons = found.reasons
         if not _same_pose(again, found, surface):
-            centre = surface.points.mean(axis=0)
             turned_deg = frames.rotation_between_deg(again.matrix, found.matrix)
-            shift_mm = float(np.linalg.norm(frames.apply(again.matrix, centre) - frames.apply(found.matrix, centre)))
+            shift_mm = float(np.linalg.norm(frames.apply(again.matrix, surface.centre)
+                                            - frames.apply(found.matrix, surface.centre)))
             reasons = [f"this pose was refined from a first pose {turned_deg:.0f} deg and {shift_mm:.0f} mm away whose "
                        f"search was in doubt [{'; '.join(found.reasons)}], and the points it was fitted to were "
                        "picked with that first pose, so the doubt stands: check the pose in the 3D view, or scan "

@@ -628,6 +628,12 @@ class SurfaceModel:
         return flat
 
     @cached_property
+    def centre(self) -> np.ndarray:
+        """The samples' mean (mm, model frame): what a pose is turned about, and whose shift tells two
+        poses apart."""
+        return self.points.mean(axis=0)
+
+    @cached_property
     def sample_cover(self) -> float:
         """How far (mm) a point of the mesh can lie from its nearest sample, at most: every face with an
         area has a sample at its centroid (pointops.sample_triangles), so its points lie within its
