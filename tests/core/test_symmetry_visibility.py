@@ -129,25 +129,3 @@ def test_a_point_beside_the_sensor_is_outside_its_view():
     rows, cols = scan.view.shape
     assert rows * cols < 10_000 and (scan.pixel[:500] >= 0).all() and (scan.pixel[500:] == -1).all()
 
-
-def test_a_scan_hides_next_to_none_of_itself_from_where_it_was_taken_but_much_from_under_its_table():
-    """ScanView.hidden_share: a block on a table seen from straight above (the table's points under the
-    block are not in the scan: the block hid them) hides next to none of its points from there (pixels
-    across the block's edge hold table points behind its top), nor from a few degrees off; from a
-    grazing viewpoint under the table, as from the one an L-block's wrong pose implied (test_verdict's
-    part on a table), most of them: the block's top behind the table, and the table's own points
-    crowded into few pixels."""
-    from workcal_wb.core.match import MAX_SELF_HIDDEN
-
-    grid = np.arange(-100.0, 100.0, 2.0)
-    x, y = (a.ravel() for a in np.meshgrid(grid, grid))
-    under_block = (np.abs(x) < 20) & (np.abs(y) < 20)
-    scan = np.vstack([np.column_stack([x, y, np.zeros_like(x)])[~under_block],
-                      np.column_stack([x, y, np.full_like(x, 30.0)])[under_block]])
-
-    def hidden(viewpoint):
-        view = visibility.View(np.asarray(viewpoint, float), np.zeros(3), 4.0)
-        return visibility.ScanView.of(scan, view).hidden_share(2 * 4.0)
-
-    assert hidden((0.0, 0.0, 800.0)) < 0.01 and hidden((30.0, 20.0, 800.0)) < 0.01
-    assert hidden((700.0, 0.0, -120.0)) > MAX_SELF_HIDDEN

@@ -146,13 +146,6 @@ CELL_VARIANCE_FLOOR = 0.01
 # normal; when more than MAX_FACING_AWAY of them face away from it, the scan was not taken from one
 # viewpoint (merged views) and the verdict falls back to scan points without visibility.
 VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
-# From where a scan was taken none of its points hides behind another (ScanView.hidden_share, with a
-# margin of the gate and SELF_HIDDEN_PIXELS pixels).  When the viewpoint a reported pose implies hides
-# more than MAX_SELF_HIDDEN of them, the scan was not taken from there: the pose's faces face away from
-# the scanner.  Measured from the reported poses' own implied viewpoints: at most 41 % over the
-# verdicts and scenes benches (245 of them, every search's), 24 % over a tester's 58 right poses (views
-# 5-75 deg above, on a slab and alone); 66-76 % for L-blocks laid upside down or slid on their table.
-SELF_HIDDEN_PIXELS, MAX_SELF_HIDDEN = 2.0, 0.5
 # Before a pose is failed for contradicting the view, the view is tried again from an estimated
 # viewpoint turned by this angle and twice it (see Judge.least_contradicted).
 SETTLE_STEP_DEG = 15.0
@@ -851,26 +844,12 @@ class Judge:
             self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
                                  f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
                                  "estimated from the scan instead")
-        viewpoint = _implied_viewpoint(points, normals)
-        if viewpoint is not None:
+        extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        viewpoint = points.mean(axis=0) + VIEW_DISTANCE_EXTENTS * extent * visibility.viewing_direction(normals)
+        away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
+        if away <= MAX_FACING_AWAY:
             self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
                                                            f"of its normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
-
-    def hidden_from_implied_view(self, T: np.ndarray) -> float:
-        """The share of the scan that would hide behind other scan points (ScanView.hidden_share) from the
-        viewpoint pose T's own matched surface implies, 0 when it implies none (its matched normals face
-        every way, or too few points lie on it).  Pose T's own, not the view the poses were weighed from:
-        that one is implied by the pose with the most points on the model, which may be a rival."""
-        idx, found, r = self._lookup(T)
-        matched = found & (r < self.gate)
-        if matched.sum() < MIN_SCAN_POINTS:
-            return 0.0
-        points = self.sample[matched]
-        viewpoint = _implied_viewpoint(points, self.surface.normals[idx[matched]] @ T[:3, :3])
-        if viewpoint is None:
-            return 0.0
-        view = visibility.ScanView.of(self.sample, visibility.View(viewpoint, points.mean(axis=0), self.pixel))
-        return view.hidden_share(self.gate + SELF_HIDDEN_PIXELS * self.pixel)
 
     def least_contradicted(self, T: np.ndarray) -> float:
         """The smallest share of pose T's view contradicted, looking from the viewpoint and from
@@ -924,16 +903,6 @@ class Judge:
                     "note": "the matched surface faces every way (views merged into one cloud?): poses weighed by "
                             "the scan points on the model, without visibility"}
         return {"position_mm": self.viewpoint.tolist(), "source": self.source, "pixel_mm": float(self.pixel)}
-
-
-def _implied_viewpoint(points: np.ndarray, normals: np.ndarray):
-    """The viewpoint a single view of ``points`` (outward ``normals``, the scan's frame) was taken from:
-    VIEW_DISTANCE_EXTENTS scan extents along the middle of the normals; None when more than
-    MAX_FACING_AWAY of them face away from there (views merged into one cloud)."""
-    extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-    viewpoint = points.mean(axis=0) + VIEW_DISTANCE_EXTENTS * extent * visibility.viewing_direction(normals)
-    away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
-    return viewpoint if away <= MAX_FACING_AWAY else None
 
 
 def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
@@ -1151,13 +1120,6 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        "the plane of a face of it that they run on from: the scanned face goes on past the model's "
                        "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
                        "flush with the part)")
-    hidden = judge.hidden_from_implied_view(T) if status == OK and judge.source.startswith("estimated") else 0.0
-    if hidden > MAX_SELF_HIDDEN:
-        reasons.append(f"from the viewpoint estimated from the faces the pose lays on the scan, {hidden:.0%} of the "
-                       f"scan's points would lie behind other scan points (at most {MAX_SELF_HIDDEN:.0%}): the scan "
-                       "was not taken from there, so its view cannot be trusted and those faces may face away from "
-                       "the scanner (a part upside down on a table it stands on); give the scanner's position "
-                       "(viewpoint) or the part's region")
     if status == OK and not stab["constrained"]:
         reasons.append("the matched surface does not fix every motion (under-constrained): free "
                        + "; ".join(stab["free_motions"]))

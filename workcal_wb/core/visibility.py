@@ -183,13 +183,6 @@ class ScanView:
         np.minimum.at(nearest, pixel[inside], depth[inside])
         return cls(view, pixel, depth, nearest, footprint(view, pixel))
 
-    def hidden_share(self, margin: float) -> float:
-        """The share of the scan's points lying more than ``margin`` mm behind the nearest scan point of
-        their pixel.  The sensor saw every point, so from where the scan was taken none is hidden so
-        (but a slanting surface's points spread in depth across a pixel: the margin)."""
-        inside = self.pixel >= 0
-        return float(np.mean(inside & (self.depth > self.nearest[np.maximum(self.pixel, 0)] + margin)))
-
 
 @dataclass
 class Evidence:
