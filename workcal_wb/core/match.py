@@ -579,21 +579,15 @@ class Judge:
         """(best state, [{"T", "evidence", "z", "far_z", "other_side", "turn"}, best first]): the poses not
         equivalent under the model's symmetries, weighed by view evidence.  Every pose is refined again
         from a wider gate first (``widen``): a fit can stop an edge's width off, its edge points dropped
-        as outliers, and from further out it slides home.  The best takes that pose only when it puts
-        as much of the scan on the model at the best's gate: from further out, clutter beside a curved
-        part's edges can also pull it along the motion its faces leave free, its edges then off.  A pose
-        whose evidence is significantly above the best's becomes the best (``polish`` finishes it like
-        the best), and a best whose view shows a misfit (scan points hidden or past its outline, surface
-        missing) is widened again.  Then the best's near-symmetric turns, refined like it (``turns``),
-        are weighed with it (_with_turns)."""
+        as outliers, and from further out it slides home.  A pose whose evidence is significantly above
+        the best's becomes the best (``polish`` finishes it like the best), and a best whose view shows
+        a misfit (scan points hidden or past its outline, surface missing) is widened again.  Then the
+        best's near-symmetric turns, refined like it (``turns``), are weighed with it (_with_turns)."""
         if self.options.method == "robust":  # each pose slides home, or it is judged off its best
             rivals = [widen(r) for r in rivals]
             wide = widen(best)
             if _moved(wide.T, best.T, self.all_points.mean(axis=0), best.gate):
-                wide = polish(wide)
-                on_model = inlier_scores(self.all_points, self.surface, [wide.T, best.T], best.gate)
-                if on_model[0] >= on_model[1]:  # it slid home, not along the part
-                    best = wide
+                best = polish(wide)
             # A rival that slid onto the best, or onto an earlier rival, is no rival; one a wall's
             # thickness away (on the other face) still is, so "the same" is within a few gates here.
             poses = [best] + rivals
