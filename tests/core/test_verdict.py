@@ -463,6 +463,43 @@ def test_a_shell_on_a_slab_is_not_ok_slid_along_its_curvature():
     assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.reasons
 
 
+def _known_shell_defect(condition: bool = True):
+    return pytest.mark.xfail(condition, strict=True, raises=AssertionError,
+                             reason="known defect (stop 28): a shell, whose curved faces map onto themselves turned "
+                                    "about their bend, comes back 'ok' slid along it or turned over; remove this mark "
+                                    "once it is fixed")
+
+
+@pytest.mark.parametrize("case, model", [
+    pytest.param("shell-on-slab-20deg", shapes.shell, marks=_known_shell_defect()),
+    pytest.param("thin-shell-alone-54deg", lambda: shapes.shell(thickness=2.0, bend_radius=90.0),
+                 marks=_known_shell_defect(np.__version__.startswith("1."))),  # Debian 13's numpy and scipy: right
+    pytest.param("long-shell-alone-50deg", lambda: shapes.shell(length=200.0, width=60.0, bend_radius=150.0),
+                 marks=_known_shell_defect(np.__version__.startswith("1.")))])  # Debian 13's: never "ok" wrong
+def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
+    """Scans a tester (helper) made of shells, each moved to stand on z = 0, in a random frame, matched
+    with seeds 0-2 (stop 28; on Debian 13 only the first is "ok" wrong):
+    - ``shapes.shell()`` on a slab 60 mm wider, seen from 20 deg above, exact: "ok" 33.9 deg about its
+      bend (61 mm) with seed 1.  The scan sees part of the arc and the slid model still covers most of it
+      (1111 scan points within 0.1 mm of it, 1169 at the truth); the scanned surface runs on past its end
+      along 2.9 % of its outline (the face-continuation test allows 3 %), and its other end sinks into
+      the slab, where no view can contradict it;
+    - a 2 mm shell bent at 90 mm, alone, 0.1 mm noise, 54 deg above: "ok" 0.59 deg and 2.4 mm off with
+      seed 2 (seeds 0 and 1 right);
+    - a shell 200 x 60 mm bent at 150 mm, alone, exact, 50 deg above: "ok" turned over (179.9 deg) with
+      seed 1; seeds 0 and 2 end 0.59 deg off, "ambiguous".
+    A rule tried in Judge.rank (a widened pose taken only when it keeps as much of the scan on the
+    model) mended the 25 deg shell of the test above, but over the tester's 234 scenes it made two wrong
+    poses "ok" and stopped one: reverted."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{case}.npz")
+    surface = SurfaceModel(_standing(model()), 0)
+    for seed in (0, 1, 2):
+        result = match(Cloud(data["scan"].astype(float), name=case), surface, tolerance_mm=0.3, seed=seed)
+        assert result.status != "ok" or right(surface, result.matrix, data["truth"]), (seed, result.reasons)
+
+
 def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     """Two chamfered pegs in one scan, the second half a turn round and 300 mm away: the viewpoint the
     verdict estimates from the matched copy put the other nearly in the sensor's plane, and framing the
