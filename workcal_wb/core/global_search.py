@@ -46,8 +46,17 @@ def without_large_plane(points: np.ndarray, voxel: float, model_diagonal: float,
     """The points less the largest plane, when that plane is wider than the model can be (a table or
     platform under the part): its points match every flat bit of the model and would swamp the
     correspondences.  Only the global search drops them; refinement sees every point."""
+    plane = large_plane(points, voxel, model_diagonal, rng, trials)
+    return points if plane is None else points[~plane[0]]
+
+
+def large_plane(points: np.ndarray, voxel: float, model_diagonal: float, rng: np.random.Generator,
+                trials: int = 200):
+    """(mask of the points on it, a point on it, its unit normal) of the largest plane the points lie on
+    within ``voxel``, when it holds PLANE_FRACTION of them and is wider than the model can be (a table
+    or platform); None otherwise."""
     if len(points) < 50:
-        return points
+        return None
     triples = points[rng.integers(0, len(points), (trials, 3))]
     normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
     length = np.linalg.norm(normals, axis=1)
@@ -66,12 +75,13 @@ def without_large_plane(points: np.ndarray, voxel: float, model_diagonal: float,
     on_plane = (near[:, best // 8] >> (7 - best % 8) & 1).astype(bool)
     flat = points[on_plane]
     if len(flat) < PLANE_FRACTION * len(points):
-        return points
-    _, _, axes = np.linalg.svd(flat - flat.mean(axis=0), full_matrices=False)
+        return None
+    centre = flat.mean(axis=0)
+    _, _, axes = np.linalg.svd(flat - centre, full_matrices=False)
     spread = np.percentile(flat @ axes[:2].T, [1, 99], axis=0)
     if np.linalg.norm(spread[1] - spread[0]) <= PLANE_WIDTH * model_diagonal:
-        return points
-    return points[~on_plane]
+        return None
+    return on_plane, centre, axes[2]
 
 
 def describe_scan(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndarray]:
