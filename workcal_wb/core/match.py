@@ -158,7 +158,7 @@ MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
 # MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
 MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
 # A placed model may reach this many tolerances through the plane its scan's other points stand on (a
-# table wider than the model, Judge.depth_through_support), no more: measured on right poses to 0.56 mm
+# table wider than the model, _depth_through_support), no more: measured on right poses to 0.56 mm
 # (a plate's bottom face in the plane, 0.1 mm noise), and 1.15-51 mm on shells slid along their bend.
 SUPPORT_TOLERANCES = 3.0
 # A face is flat where its samples' normals agree over CONTINUED_FLAT_SPACINGS model spacings (its edge
