@@ -128,4 +128,3 @@ def test_a_point_beside_the_sensor_is_outside_its_view():
     scan = visibility.ScanView.of(np.r_[part, beside], view)
     rows, cols = scan.view.shape
     assert rows * cols < 10_000 and (scan.pixel[:500] >= 0).all() and (scan.pixel[500:] == -1).all()
-
