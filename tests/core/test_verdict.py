@@ -525,3 +525,27 @@ def test_depth_through_the_support_is_measured_from_the_side_the_part_stands_on(
     at_truth = _depth_through_support(scan, surface, frames.invert(truth), 5.0, 0)
     assert at_truth < 0.5  # its feet on the slab, within the plane's fit through the 5 mm band
     assert _depth_through_support(scan, surface, frames.invert(lowered), 5.0, 0) == pytest.approx(at_truth + 2.0, abs=0.1)
+
+
+def test_the_grid_clears_points_of_running_on_before_the_samples_tree_weighs_the_rest():
+    """Judge.continued_faces asks the cell grid first which scan points may lie off the model (a cell's
+    sample is never nearer a point than its nearest sample), and the samples' KD-tree only for those: a
+    model loaded from the cache need not build it (~20 ms of a warm bunny match).  The plate's rows
+    running on past its end are counted as when the tree weighed every point, and rows on the plate
+    leave the tree unbuilt."""
+    from workcal_wb.core.match import Judge, MatchOptions, prepare
+
+    def counted(points, grid=True):
+        surface = prepare(SurfaceModel(shapes.plate(), 0))
+        surface._tree._built = None  # as loaded from the cache: its grids filled, no tree
+        if not grid:  # every point found off by the grid, so weighed by the tree
+            surface.nearest_cell = lambda moved, gate: (None, None, np.zeros(len(moved), bool))
+        judge = Judge(points, surface, (points[:50], np.full(50, 0.01)), 0.7, MatchOptions(), [])
+        judge.gate = 0.1
+        judge._set_view(np.array([0.0, -300.0, 300.0]), points.mean(axis=0), "given")
+        return judge.continued_faces(np.eye(4)), surface._tree._built is not None
+
+    assert counted(_plate_rows()) == (0, False)
+    longer = _plate_rows(x_end=90.0)
+    count, built = counted(longer)
+    assert built and count > 500 and (count, True) == counted(longer, grid=False)  # rows from x = 60 to 90 run on

@@ -196,9 +196,10 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
     order = None  # the candidates, ascending (None: every point)
     # A bucket is the top bits of a multiplicative hash of the key: the key's low bits are all zero for
     # coordinates that were float32 (most scanners' files), so they would put every point in one bucket.
+    # About as many buckets as candidates: their int64 counts, not the scan, set the search's peak.
     for multiplier in _BUCKET_HASHES:
         candidates = len(points) if order is None else len(order)
-        bits = int(np.clip(np.ceil(np.log2(2 * candidates + 1)), 10, 23))
+        bits = int(np.clip(np.ceil(np.log2(candidates + 1)), 10, 23))
         bucket = (key.copy() if order is None else key[order]).view(np.uint64)
         bucket *= np.uint64(multiplier)
         bucket >>= np.uint64(64 - bits)

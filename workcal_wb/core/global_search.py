@@ -85,14 +85,14 @@ def large_plane(points: np.ndarray, voxel: float, model_diagonal: float, rng: np
 
 
 def describe_scan(points: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 2, 33) FPFH of coarse scan points with their normals oriented one way and the other,
-    and those normals (the first way).
+    """(N, 2, 33) FPFH of coarse scan points with their normals oriented one way and the other, in
+    float32 as they are matched (nearest_both_ways), and those normals (the first way).
 
     Flipping every normal negates FPFH's first and third angle and keeps the second, so the
     flipped histogram is the same one with those two 11-bin blocks reversed: one computation.
     """
     normals = pointops.orient_along_tree(points, pointops.pca_normals(points, NORMAL_NEIGHBOURS))
-    features = fpfh(points, normals, FEATURE_RADIUS * voxel)
+    features = fpfh(points, normals, FEATURE_RADIUS * voxel).astype(np.float32)
     return np.stack([features, features[:, _FLIPPED_BINS]], axis=1), normals
 
 
@@ -105,7 +105,7 @@ def nearest_both_ways(a: np.ndarray, b: np.ndarray, chunk: int = 256):
     numpy's argmin down its columns makes stay a few MB (the same answers, bit for bit, for any
     chunk; as fast as 2048 rows, measured, and 15 MB less peak memory in a bunny match).
     """
-    a, b = a.astype(np.float32), b.astype(np.float32)
+    a, b = a.astype(np.float32, copy=False), b.astype(np.float32, copy=False)
     a_sq, b_sq = np.einsum("ij,ij->i", a, a), np.einsum("ij,ij->i", b, b)
     a_to_b, a_dist = np.empty(len(a), np.int64), np.empty(len(a), np.float32)
     b_to_a, b_dist = np.zeros(len(b), np.int64), np.full(len(b), np.inf, np.float32)

@@ -250,6 +250,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         starts = [(frames.invert(frames.as_transform(init, "initial guess")), 1.0)]
         gate = voxel  # a guess may be off by a few millimetres
 
+    pointops.hand_back_freed_heap()  # the global search's temporaries: refinement's would pile on them
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless)
     sample = fine[:VERDICT_POINTS]
@@ -365,6 +366,7 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
         voxel /= 1.25
         coarse = global_search.coarse_points(points, voxel)
     coarse = global_search.without_large_plane(coarse, voxel, surface.diagonal, rng)
+    pointops.hand_back_freed_heap()  # the whole scan's voxel grid is done: its temporaries would stay resident
     if len(coarse) < 10:
         return []
     features, normals = global_search.describe_scan(coarse, voxel)
@@ -774,8 +776,15 @@ class Judge:
         if self.view is None or not surface.is_mesh:
             return 0
         moved = frames.apply(T, self.all_points)
-        distance = surface.tree.query(moved)[0]
-        off = np.flatnonzero(distance > self.gate + surface.sample_cover)
+        threshold = self.gate + surface.sample_cover
+        # The cell grid clears most points (a cell's sample is no nearer a point than its nearest one),
+        # so the KD-tree weighs the rest only, and a cached model's match seldom has to build it.
+        maybe_off = np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
+        if len(maybe_off) < MIN_CONTINUED_POINTS:
+            return 0
+        distance = np.zeros(len(moved))
+        distance[maybe_off] = surface.tree.query(moved[maybe_off])[0]
+        off = maybe_off[distance[maybe_off] > threshold]
         if len(off) < MIN_CONTINUED_POINTS:
             return 0
         # In a face's plane: within the gate, or a third of the tolerance where the noise is below it (an

@@ -35,13 +35,13 @@ from .errors import OutputError
 from .geometry import Cloud
 from .surface import SurfaceModel
 
-FORMAT_VERSION = 3  # 2: a mesh is prepared without its collapsed faces, 3: nor its repeated ones (geometry.checked), and a precomputed grid holds its diagonal cells
+FORMAT_VERSION = 4  # 2: a mesh is prepared without its collapsed faces, 3: nor its repeated ones (geometry.checked), and a precomputed grid holds its diagonal cells, 4: with its sample cover and float32 features
 MAGIC = b"WorkCal prepared model\n"
 SUFFIX = ".model"
 DEFAULT_MAX_BYTES = 2 << 30
 ALIGN = 64
 # Only these dtypes are ever written or read (little-endian numbers and booleans).
-DTYPES = ("<f8", "<i8", "<i4", "|b1")
+DTYPES = ("<f8", "<f4", "<i8", "<i4", "|b1")
 # A model loaded from the cache is written again when its run added features, or grid cells
 # numbering at least this many and this fraction of those stored.
 GROWTH_CELLS, GROWTH_FRACTION = 5000, 0.2

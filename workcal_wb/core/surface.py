@@ -390,6 +390,7 @@ class SurfaceModel:
         self.symmetry_axes, self.symmetry_points = found["axes"], found["points"]
         self.symmetry_orders, self.symmetry_deviations_mm = found["orders"], found["deviations_mm"]
         self.flips = found["flips"]
+        self.sample_cover = self._sample_cover() if self.is_mesh else 0.0
         self._features: dict[float, tuple] = {}  # voxel -> coarse points, normals, FPFH
         self._occupied: dict[float, np.ndarray] = {}  # cell size -> keys of the cells the surface passes through
         self._grids: dict[int, NearestGrid] = {}  # level -> the nearest-sample grid for its gates
@@ -495,7 +496,9 @@ class SurfaceModel:
             normals = pointops.pca_normals(centroids, NORMAL_NEIGHBOURS)  # as the scan's are estimated
             # Orient like the surface: PCA gives the plane, the samples' normals give the side.
             normals[np.einsum("ij,ij->i", normals, self.normals[rep]) < 0] *= -1
-            self._features[key] = (centroids, normals, fpfh(centroids, normals, FEATURE_RADIUS * voxel))
+            # In float32, as features are matched (global_search.nearest_both_ways): half the memory.
+            features = fpfh(centroids, normals, FEATURE_RADIUS * voxel).astype(np.float32)
+            self._features[key] = (centroids, normals, features)
         return self._features[key]
 
 
@@ -507,7 +510,8 @@ class SurfaceModel:
         grids computed until now.  ``from_state`` makes the same model from it."""
         meta = {"name": self.name, "warnings": list(self.warnings), "diagonal": self.diagonal,
                 "is_mesh": self.is_mesh, "spacing": self.spacing, "noise_mm": self.noise_mm,
-                "symmetry_tolerance_mm": self.symmetry_tolerance_mm, "features": list(self._features),
+                "symmetry_tolerance_mm": self.symmetry_tolerance_mm, "sample_cover": self.sample_cover,
+                "features": list(self._features),
                 "occupied": list(self._occupied), "grids": list(self._grids),
                 "custom_grids": [list(key) for key in self._custom_grids]}
         arrays = {"points": self.points, "normals": self.normals, "vertices": self.vertices,
@@ -529,7 +533,7 @@ class SurfaceModel:
         """The model ``state`` gave; ValueError (or KeyError, TypeError) when the data cannot be one."""
         self = cls.__new__(cls)
         for key, kind in (("name", str), ("diagonal", float), ("is_mesh", bool), ("spacing", float),
-                          ("noise_mm", float), ("symmetry_tolerance_mm", float)):
+                          ("noise_mm", float), ("symmetry_tolerance_mm", float), ("sample_cover", float)):
             if not isinstance(meta[key], kind) and not (kind is float and isinstance(meta[key], int)):
                 raise ValueError(f"{key} is not a {kind.__name__}")
             setattr(self, key, kind(meta[key]))
@@ -558,7 +562,7 @@ class SurfaceModel:
             m = len(arrays[f"features.{i}.points"])
             self._features[float(voxel)] = (take(f"features.{i}.points", "f8", (m, 3)),
                                             take(f"features.{i}.normals", "f8", (m, 3)),
-                                            take(f"features.{i}.fpfh", "f8", (m, 33)))
+                                            take(f"features.{i}.fpfh", "f4", (m, 33)))
         self._occupied = {float(cell): take(f"occupied.{i}", "i8", (None,)) for i, cell in enumerate(meta["occupied"])}
         self._grids, self._custom_grids = {}, {}
         for prefix, keys, grids in (("grid", [int(level) for level in meta["grids"]], self._grids),
@@ -633,14 +637,14 @@ class SurfaceModel:
         poses apart."""
         return self.points.mean(axis=0)
 
-    @cached_property
-    def sample_cover(self) -> float:
+    def _sample_cover(self) -> float:
         """How far (mm) a point of the mesh can lie from its nearest sample, at most: every face with an
         area has a sample at its centroid (pointops.sample_triangles), so its points lie within its
         farthest corner's distance of that; a face without one is a segment, each point of which lies
         within half its length of an end, and that end within its own nearest sample's distance of one.
-        Meshes only; computed once per model (each match's far-off test asks for it), a block of faces
-        at a time (the corners of a whole large mesh, and their copies, set a match's peak memory)."""
+        Computed when the model is made and kept in the model cache (every verdict asks for it: ~25 ms
+        of a warm bunny match), a block of faces at a time (the corners of a whole large mesh, and
+        their copies, set a match's peak memory)."""
         return max((self._cover(self.triangles[start:start + COVER_BLOCK])
                     for start in range(0, len(self.triangles), COVER_BLOCK)), default=0.0)
 
