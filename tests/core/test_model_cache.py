@@ -57,7 +57,7 @@ def _entries(folder: Path) -> list:
     return sorted(folder.glob(f"*{SUFFIX}"))
 
 
-def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path):
+def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path, monkeypatch):
     folder, U = files
     scan = read_cloud(folder / "scan.ply")
     plain = match(scan, SurfaceModel(read_cloud(folder / "car.ply"), 2), seed=2)
@@ -66,6 +66,7 @@ def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path
     missed = match(scan, missed_model, seed=2)
     assert (cold.hits, cold.misses) == (0, 1) and cold.store() and len(_entries(tmp_path)) == 1
     warm = ModelCache(tmp_path)
+    monkeypatch.setattr(SurfaceModel, "_sample_cover", lambda self: pytest.fail("the sample cover measured again"))
     model = warm.model_file(folder / "car.ply", seed=2)
     assert (warm.hits, warm.misses) == (1, 0) and model.name == "car.ply"
     hit = match(scan, model, seed=2)
@@ -74,7 +75,7 @@ def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path
     # What the first match computed lazily (its voxel's features, the grid cells it visited) was kept:
     # the same match on the loaded model fills no cell and computes no feature.
     assert all(grid.filled == 0 for grid in model._grids.values())
-    assert model.sample_cover == missed_model.sample_cover > 0  # read from the file, not measured again
+    assert model.sample_cover == missed_model.sample_cover > 0  # read from the file
     assert not warm.store()  # nothing grew: nothing written again
 
 

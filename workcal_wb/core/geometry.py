@@ -207,6 +207,12 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
         shared = np.bincount(bucket, minlength=1 << bits) > 1
         order = np.flatnonzero(shared[bucket]) if order is None else order[shared[bucket]]
     order = order[np.argsort(key[order], kind="stable")]
+    # The points sharing their key with another, by key and then by coordinates (stable): copies of a
+    # point lie side by side even where a different point shares their key (it is linear in the
+    # coordinates' bits), the first copy first.
+    ties = key[order[1:]] == key[order[:-1]]
+    order = order[np.r_[ties, False] | np.r_[False, ties]]
+    order = order[np.lexsort((points[order, 2], points[order, 1], points[order, 0], key[order]))]
     later, earlier = order[1:], order[:-1]
     pairs = np.flatnonzero(key[later] == key[earlier])
     later, earlier = later[pairs], earlier[pairs]
