@@ -549,3 +549,20 @@ def test_the_grid_clears_points_of_running_on_before_the_samples_tree_weighs_the
     longer = _plate_rows(x_end=90.0)
     count, built = counted(longer)
     assert built and count > 500 and (count, True) == counted(longer, grid=False)  # rows from x = 60 to 90 run on
+
+
+def test_a_coarse_cad_mesh_is_not_given_a_coarser_grid_to_clear_points_through():
+    """A box of twelve faces: its samples lie up to 40 mm from points of its faces (sample_cover), a
+    gate several grid levels coarser than prepare fills; clearing the scan's points through such a grid
+    would make it for this alone (and the model cache would write the model again), so the KD-tree
+    weighs every point.  Found by a reviewer (helper)."""
+    from workcal_wb.core.match import Judge, MatchOptions
+
+    surface = SurfaceModel(shapes.box((60.0, 40.0, 20.0), edge_mm=100.0), 0)
+    xs, ys = np.meshgrid(np.arange(-30.0, 50.0, 1.0), np.arange(-20.0, 20.0, 1.0))
+    points = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])  # the top face, running on 20 mm
+    judge = Judge(points, surface, (points[:50], np.full(50, 0.01)), 1.0, MatchOptions(), [])
+    judge.gate = 0.1
+    judge._set_view(np.array([0.0, -300.0, 300.0]), points.mean(axis=0), "given")
+    assert surface.sample_cover > 20.0 and judge.continued_faces(np.eye(4)) == 0  # none lies that far off
+    assert not surface._grids

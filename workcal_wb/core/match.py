@@ -154,6 +154,9 @@ SETTLE_STEP_DEG = 15.0
 # scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
 # misplaced (or another object lies flush with the part): the match is ambiguous.
 MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
+# prepare fills the cell grids of the first PREPARED_LEVELS levels: gates up to 2 x GATE_CELLS sample
+# spacings, 3 coarse voxels at the default voxel.
+PREPARED_LEVELS = 2
 # A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
 # MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
 MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
@@ -308,7 +311,7 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
     while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / MAX_VOXEL_REFINEMENT:
         surface.coarse(voxel)
         voxel /= 1.25
-    for level in range(2):  # gates up to 2 x GATE_CELLS spacings: 3 coarse voxels at the default voxel
+    for level in range(PREPARED_LEVELS):
         surface.grid_level(level).precompute()
     pointops.hand_back_freed_heap()  # the building's temporaries: a kept model's process need not hold them
     return surface
@@ -778,8 +781,11 @@ class Judge:
         moved = frames.apply(T, self.all_points)
         threshold = self.gate + surface.sample_cover
         # The cell grid clears most points (a cell's sample is no nearer a point than its nearest one),
-        # so the KD-tree weighs the rest only, and a cached model's match seldom has to build it.
-        maybe_off = np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
+        # so the KD-tree weighs the rest only, and a cached model's match seldom has to build it; not
+        # through a coarser grid than prepare fills (a CAD mesh's large faces have a large cover), which
+        # would be filled for this alone.
+        maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
+                     if threshold <= surface.grid_reach(PREPARED_LEVELS) else np.arange(len(moved)))
         if len(maybe_off) < MIN_CONTINUED_POINTS:
             return 0
         distance = np.zeros(len(moved))

@@ -458,6 +458,10 @@ class SurfaceModel:
             self._grids[level] = NearestGrid.around(self.points, self._tree, cell, GATE_CELLS * cell)
         return self._grids[level]
 
+    def grid_reach(self, levels: int) -> float:
+        """The largest gate (mm) the cell grids of the first ``levels`` levels serve."""
+        return GATE_CELLS * 2 ** (levels - 1) * self.spacing
+
     def grid(self, cell: float, bound: float) -> NearestGrid:
         """A cell grid of its own cell size and bound (cached), e.g. for a method that fills it
         ahead of time."""
