@@ -259,6 +259,8 @@ def test_a_duplicate_is_found_when_another_point_shares_its_key():
     p = np.ones(3)
     q = np.array([one + 1, one - 1, one - 20]).view(np.float64)
     assert geometry._duplicates(np.array([p, q, p])).tolist() == [False, False, True]
+    assert geometry._duplicates(np.array([p, 2 * p])).tolist() == [False, False]  # no candidate left
+    assert geometry._duplicates(p[None]).tolist() == [False]
     lattice = np.random.default_rng(0).integers(0, 17, (5000, 3)) * 0.5
     first = np.zeros(len(lattice), bool)
     first[np.unique(lattice, axis=0, return_index=True)[1]] = True

@@ -211,7 +211,10 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
     # point lie side by side even where a different point shares their key (it is linear in the
     # coordinates' bits), the first copy first.
     ties = key[order[1:]] == key[order[:-1]]
-    order = order[np.r_[ties, False] | np.r_[False, ties]]
+    in_run = np.zeros(len(order), bool)
+    in_run[1:] |= ties
+    in_run[:-1] |= ties
+    order = order[in_run]
     order = order[np.lexsort((points[order, 2], points[order, 1], points[order, 0], key[order]))]
     later, earlier = order[1:], order[:-1]
     pairs = np.flatnonzero(key[later] == key[earlier])
