@@ -785,12 +785,12 @@ class Judge:
         # through a coarser grid than prepare fills (a CAD mesh's large faces have a large cover), which
         # would be filled for this alone.
         maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
-                     if threshold <= surface.grid_reach(PREPARED_LEVELS) else np.arange(len(moved)))
+                     if surface.grid_level_for(threshold) < PREPARED_LEVELS else np.arange(len(moved)))
         if len(maybe_off) < MIN_CONTINUED_POINTS:
             return 0
-        distance = np.zeros(len(moved))
-        distance[maybe_off] = surface.tree.query(moved[maybe_off])[0]
-        off = maybe_off[distance[maybe_off] > threshold]
+        distance = surface.tree.query(moved[maybe_off])[0]
+        far = distance > threshold
+        off, distance = maybe_off[far], distance[far]  # the points off the model and their distances
         if len(off) < MIN_CONTINUED_POINTS:
             return 0
         # In a face's plane: within the gate, or a third of the tolerance where the noise is below it (an
@@ -798,9 +798,8 @@ class Judge:
         margin = max(self.gate, self.options.tolerance_mm / 3)
         # Beside the model: within a few scan spacings (the rows of a sparse scan), at most
         # CONTINUED_REACH_SAMPLES model spacings (the samples weighed per point).
-        reach = self.gate + surface.sample_cover + min(CONTINUED_REACH_SPACINGS * self.all_spacing,
-                                                        CONTINUED_REACH_SAMPLES * surface.spacing)
-        beside = off[distance[off] <= reach]
+        reach = threshold + min(CONTINUED_REACH_SPACINGS * self.all_spacing, CONTINUED_REACH_SAMPLES * surface.spacing)
+        beside = off[distance <= reach]
         if len(beside) == 0:
             return 0
         beside = beside[::-(-len(beside) // CONTINUED_SEEDS)]  # enough to seed any run worth a reason

@@ -442,8 +442,7 @@ class SurfaceModel:
 
     def _cell_offsets(self, points: np.ndarray, gate: float):
         """(distance, sample index, found, offset from the sample) through the gate's cell grid."""
-        level = max(0, int(np.ceil(np.log2(gate / (GATE_CELLS * self.spacing)))))
-        idx = self.grid_level(level).lookup(points)
+        idx = self.grid_level(self.grid_level_for(gate)).lookup(points)
         found = idx >= 0
         idx = np.where(found, idx, 0)
         offset = points - self.points[idx]
@@ -451,16 +450,16 @@ class SurfaceModel:
         found &= d <= gate
         return d, idx, found, offset
 
+    def grid_level_for(self, gate: float) -> int:
+        """The level of the cell grid that serves ``gate`` (mm): the finest whose bound holds it."""
+        return max(0, int(np.ceil(np.log2(gate / (GATE_CELLS * self.spacing)))))
+
     def grid_level(self, level: int) -> NearestGrid:
         """The cell grid for gates up to GATE_CELLS x 2^level sample spacings (cached)."""
         if level not in self._grids:
             cell = self.spacing * 2**level
             self._grids[level] = NearestGrid.around(self.points, self._tree, cell, GATE_CELLS * cell)
         return self._grids[level]
-
-    def grid_reach(self, levels: int) -> float:
-        """The largest gate (mm) the cell grids of the first ``levels`` levels serve."""
-        return GATE_CELLS * 2 ** (levels - 1) * self.spacing
 
     def grid(self, cell: float, bound: float) -> NearestGrid:
         """A cell grid of its own cell size and bound (cached), e.g. for a method that fills it
