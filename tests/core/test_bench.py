@@ -49,15 +49,16 @@ def test_with_clutter_is_deterministic_for_a_seed():
     assert np.array_equal(a, b)
 
 
-def _rows(method, success=True, time_s=0.1, group="bunny clean"):
-    return [Row(f"case {i}", group, method, 40000, 0.05 if success or i else 5.0, 0.1, time_s, "ok", False)
+def _rows(method, success=True, time_s=0.1, group="bunny clean", cpu_s=0.1):
+    return [Row(f"case {i}", group, method, 40000, 0.05 if success or i else 5.0, 0.1, time_s, "ok", False, cpu_s)
             for i in range(4)]
 
 
 def test_table_reports_met_and_missed_targets():
-    good = _table({WORKCAL: (_rows(WORKCAL, time_s=0.1), 300.0), STOCK: (_rows(STOCK, time_s=0.3), 400.0)},
+    good = _table({WORKCAL: (_rows(WORKCAL, time_s=0.1), 300.0), STOCK: (_rows(STOCK, time_s=0.3, cpu_s=0.55), 400.0)},
                   seed=0, quick=True, rounds=1, note=None)
-    assert not good.missed and "all met" in good.text and "| 0.33 |" in good.text
+    assert not good.missed and "all met" in good.text
+    assert "| 0.100 | 0.33 | 0.100 |" in good.text and "| 0.300 | 1.00 | 0.550 |" in good.text  # time, ratio, CPU
     assert "WorkCal 300 MB, Open3D stock 400 MB" in good.text
     slow_and_wrong = _table({WORKCAL: (_rows(WORKCAL, success=False, time_s=0.2), 500.0),
                              STOCK: (_rows(STOCK, time_s=0.3), 400.0)}, seed=0, quick=True, rounds=1, note=None)
