@@ -48,7 +48,7 @@ class Row:
     time_s: float
     status: str
     exact: bool
-    cpu_s: float = float("nan")  # the process's CPU time over the call, all its threads
+    cpu_s: float  # the process's CPU time over the call, all its threads
 
     @property
     def success(self) -> bool:
