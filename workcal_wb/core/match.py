@@ -146,6 +146,8 @@ CELL_VARIANCE_FLOOR = 0.01
 # normal; when more than MAX_FACING_AWAY of them face away from it, the scan was not taken from one
 # viewpoint (merged views) and the verdict falls back to scan points without visibility.
 VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
+# A model face in the support's plane rests on it when its normal is within 60 deg of pointing into it.
+RESTING_COS = 0.5
 # Before a pose is failed for contradicting the view, the view is tried again from an estimated
 # viewpoint turned by this angle and twice it (see Judge.least_contradicted).
 SETTLE_STEP_DEG = 15.0
@@ -257,11 +259,12 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless)
     sample = fine[:VERDICT_POINTS]
+    support = Support.of(sample, voxel, surface.diagonal, options.seed)
 
     def judged(best, rivals):
         """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
         judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
-                      options, [])
+                      options, [], support)
 
         def polish(state):
             return _polish(state, fine, surface, options.tolerance_mm, hopeless)
@@ -559,8 +562,9 @@ class Judge:
     """
 
     def __init__(self, sample: np.ndarray, surface: SurfaceModel, probes, spacing: float,
-                 options: MatchOptions, warnings: list):
+                 options: MatchOptions, warnings: list, support: Support | None = None):
         self.surface, self.options, self.warnings = surface, options, warnings
+        self.support = support  # the plane the part stands on, found in ``sample`` (Support.of)
         self.all_points, self.all_spacing = sample, spacing  # the fine level's points, and their spacing
         self.probes, self.probe_noise = probes  # points the scan's noise was measured about, and the noise there
         self.scan_noise = float(np.median(self.probe_noise))
@@ -851,10 +855,18 @@ class Judge:
         top = int(np.argmax([np.sum(found & (r < self.gate)) for _, found, r in lookups]))
         idx, found, r = lookups[top]
         matched = found & (r < self.gate)
-        points = self.sample[matched]
+        normals = self.surface.normals[idx] @ poses[top].T[:3, :3]  # model normals in the scan's frame
+        if self.support is not None:
+            # A face laid in the support's plane facing into it rests on the support and is never seen:
+            # the scan points there are the support's.  Counted, they are normals facing away from the
+            # sensor, and the viewpoint implied by a pose that lays the part's foot on open table
+            # (half a turn about the vertical) came out grazing, where its misfit shows nowhere.
+            resting = (self.support.on_plane[:len(self.sample)]
+                       & (normals @ self.support.normal < -RESTING_COS))
+            matched &= ~resting
+        points, normals = self.sample[matched], normals[matched]
         if len(points) < MIN_SCAN_POINTS:
             return
-        normals = self.surface.normals[idx[matched]] @ poses[top].T[:3, :3]  # model normals in the scan's frame
         given = self.options.viewpoint
         if given is not None:
             away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
@@ -1140,7 +1152,7 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
                        "the plane of a face of it that they run on from: the scanned face goes on past the model's "
                        "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
                        "flush with the part)")
-    depth = _depth_through_support(sample, surface, T, voxel, options.seed) if status == OK else 0.0
+    depth = _depth_through_support(judge.support, surface, T) if status == OK else 0.0
     if depth > SUPPORT_TOLERANCES * options.tolerance_mm:
         reasons.append(f"the placed model reaches {depth:.1f} mm through the plane the rest of the scan stands on "
                        f"(at most {SUPPORT_TOLERANCES:g} times the tolerance): a part cannot be inside the table "
@@ -1164,21 +1176,37 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judge
         viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), ties=ties, **result)
 
 
-def _depth_through_support(sample: np.ndarray, surface: SurfaceModel, T: np.ndarray, voxel: float,
-                           seed: int) -> float:
-    """How far (mm) the model placed by T (scan -> model) reaches through the scan's support: the largest
-    plane in the scan wider than the model (global_search.large_plane), from the side most of the
-    scan's other points lie on (the side parts stand on); 0 without such a plane.  A shell slid along
-    its bend still fits the scan where both overlap, but sinks one end into the table."""
-    plane = global_search.large_plane(sample, voxel, surface.diagonal, np.random.default_rng(seed))
-    if plane is None:
+@dataclass(frozen=True)
+class Support:
+    """The plane the scan's part stands on: the largest plane in the scan wider than the model
+    (global_search.large_plane), its normal turned to the side most of the scan's other points lie
+    on (the side parts stand on), and which of the points it was found in lie on it."""
+
+    on_plane: np.ndarray
+    centre: np.ndarray
+    normal: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray, voxel: float, model_diagonal: float, seed: int):
+        """The support of scan ``points`` (None without such a plane)."""
+        plane = global_search.large_plane(points, voxel, model_diagonal, np.random.default_rng(seed))
+        if plane is None:
+            return None
+        on_plane, centre, normal = plane
+        height = (points[~on_plane] - centre) @ normal
+        if np.count_nonzero(height < -voxel) > np.count_nonzero(height > voxel):
+            normal = -normal
+        return cls(on_plane, centre, normal)
+
+
+def _depth_through_support(support: Support | None, surface: SurfaceModel, T: np.ndarray) -> float:
+    """How far (mm) the model placed by T (scan -> model) reaches through the scan's support; 0
+    without one.  A shell slid along its bend still fits the scan where both overlap, but sinks one
+    end into the table."""
+    if support is None:
         return 0.0
-    on_plane, centre, normal = plane
-    height = (sample[~on_plane] - centre) @ normal
-    if np.count_nonzero(height < -voxel) > np.count_nonzero(height > voxel):
-        normal = -normal
     placed = frames.apply(frames.invert(T), surface.points)
-    return float(max(0.0, -((placed - centre) @ normal).min()))
+    return float(max(0.0, -((placed - support.centre) @ support.normal).min()))
 
 
 def _far_off_words(candidate: dict) -> str:
