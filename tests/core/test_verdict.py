@@ -466,8 +466,7 @@ def _tilted_shell() -> Cloud:
     ("shell-on-slab-25deg", shapes.shell),
     ("shell-on-slab-20deg", shapes.shell),
     ("tilted-shell-on-slab-25deg", _tilted_shell),
-    pytest.param("thin-shell-alone-54deg", lambda: shapes.shell(thickness=2.0, bend_radius=90.0),
-                 marks=_known_shell_defect(np.__version__.startswith("1."))),  # Debian 13's numpy and scipy: right
+    ("thin-shell-alone-54deg", lambda: shapes.shell(thickness=2.0, bend_radius=90.0)),
     pytest.param("long-shell-alone-50deg", lambda: shapes.shell(length=200.0, width=60.0, bend_radius=150.0),
                  marks=_known_shell_defect(np.__version__.startswith("1.")))])  # Debian 13's: never "ok" wrong
 def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
@@ -485,9 +484,17 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
       runs on past its end along 2.9 % of its outline (the face-continuation test allows 3 %);
     - the same shell turned 35 deg about the y axis, on a slab 80 mm wider, 25 deg above, 0.02 mm
       noise: "ok" 0.65 deg and 1.2 mm off, every seed (1.3 mm into the slab).
-    Alone, two remain known defects on Debian 12 (nothing to sink into):
-    - a 2 mm shell bent at 90 mm, 0.1 mm noise, 54 deg above: "ok" 0.59 deg and 2.4 mm off with seed 2;
-    - a shell 200 x 60 mm bent at 150 mm, exact, 50 deg above: "ok" turned over (179.9 deg) with seed 1.
+    Alone (nothing to sink into):
+    - a 2 mm shell bent at 90 mm, 0.1 mm noise, 54 deg above: "ok" 0.59 deg and 2.9 mm off with seed 2 on
+      Debian 12, the scan laid on the wall's other face (measured, stop 32).  Its surface spreads 5.07 %
+      of its diagonal across its thinnest axis, just over the 5 % that made a part thin, so the pose laid
+      through the wall was never tried; tried (a part is thin by its wall's thickness across that axis,
+      SurfaceModel.wall_across: 1.2 % of its diagonal), it fits at 0.95 noises against the best's 1.95,
+      and lies 2.1 mm from the best, within two gates, where it was dropped as the best itself.  Kept
+      as a rival seen from the other side, it makes the match "ambiguous";
+    - a known defect on Debian 12: a shell 200 x 60 mm bent at 150 mm, exact, 50 deg above: "ok" turned
+      over (179.9 deg) with seed 1, at 0.24 mm RMS (the scan's noise 0.001 mm); the right pose is not
+      among the candidates (the nearest, a turn of the best, 4.3 deg off; a match from it goes home).
     The tester's scans are in a random frame.  A rule tried in Judge.rank first (a widened pose taken only
     when it keeps as much of the scan on the model) mended the 25 deg shell, but over the tester's 234
     scenes it made two wrong poses "ok" and stopped one: reverted."""
@@ -500,6 +507,25 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
         assert result.status != "ok" or right(surface, result.matrix, data["truth"]), (seed, result.reasons)
 
 
+@pytest.mark.parametrize("case, model, motion_seed", [
+    ("thin-shell-alone-54deg", lambda: shapes.shell(thickness=2.0, bend_radius=90.0), 201),
+    ("long-shell-alone-50deg", lambda: shapes.shell(length=200.0, width=60.0, bend_radius=150.0), 202)])
+def test_a_shell_moved_to_another_frame_is_not_ok_on_its_other_face(case, model, motion_seed):
+    """The shells scanned alone, moved to another frame and matched with seed 2: both came back "ok",
+    the thin one 0.6 deg and 2.9 mm off with its scan laid on the wall's other face, the long one turned
+    over (Debian 12's numpy and scipy, stop 32).  Since a part is thin by its wall across (see
+    test_a_part_is_thin_by_its_wall_however_far_it_bends), the pose laid through the wall is tried and
+    kept as a rival seen from the other side: both "ambiguous"."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{case}.npz")
+    motion = random_motion(np.random.default_rng(motion_seed), 500.0)
+    surface = SurfaceModel(_standing(model()), 0)
+    scan = Cloud(frames.apply(motion, data["scan"].astype(float)), name=case)
+    result = match(scan, surface, tolerance_mm=0.3, seed=2)
+    assert result.status != "ok" or right(surface, result.matrix, motion @ data["truth"]), result.reasons
+
+
 def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     """Two chamfered pegs in one scan, the second half a turn round and 300 mm away: the viewpoint the
     verdict estimates from the matched copy put the other nearly in the sensor's plane, and framing the
@@ -508,6 +534,27 @@ def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     surface = SurfaceModel(shapes.peg(), 0)
     result = match(Cloud(data["scan"].astype(float), name="two pegs"), surface, tolerance_mm=0.3, seed=0)
     assert result.status in ("ambiguous", "failed") and result.reasons, (result.status, result.reasons)
+
+
+@pytest.mark.parametrize("name, model, wall_mm", [
+    ("thin shell bent at 90 mm", lambda: shapes.shell(thickness=2.0, bend_radius=90.0), 2.0),
+    ("long shell bent at 150 mm", lambda: shapes.shell(length=200.0, width=60.0, bend_radius=150.0), 4.0),
+    ("shell", shapes.shell, 4.0), ("plate", shapes.plate, 6.0), ("L-block", shapes.l_block, None),
+    ("peg", shapes.peg, None), ("ellipsoid", shapes.ellipsoid, None)])
+def test_a_part_is_thin_by_its_wall_however_far_it_bends(name, model, wall_mm):
+    """A plate or shell may be scanned on one face and laid on the other, so the verdict tries that
+    pose (match._through_the_wall) on thin parts only.  Thin used to mean a surface spread less than
+    5 % of the diagonal across its thinnest axis: the two shells bent furthest spread 5.07 and 5.03 %
+    and were left out (stop 32: the 2 mm one came back "ok" laid on its other face).  Their wall across
+    that axis is their thickness; a body's is its depth, 10 % of its diagonal or more."""
+    from workcal_wb.core.match import THIN_PART
+
+    surface = SurfaceModel(model(), 0)
+    if wall_mm is None:
+        assert surface.wall_across > THIN_PART * surface.diagonal, surface.wall_across
+    else:
+        assert surface.wall_across == pytest.approx(wall_mm, rel=0.1)
+        assert surface.wall_across < THIN_PART * surface.diagonal
 
 
 @pytest.mark.parametrize("turn_deg", [0.0, 180.0])

@@ -176,9 +176,12 @@ SUPPORT_TOLERANCES = 3.0
 # visibility.FACING_COS, lets samples a little past grazing into the z-buffer).
 CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_REACH_SAMPLES, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 12.0, 4.0
 CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS, CONTINUED_SAMPLES = 0.1, 8, 200, 256
-# A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its surface
-# spreads by less than this fraction of its diagonal (standard deviation) across its thinnest axis.
-THIN_PART = 0.05
+# A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its wall across
+# (SurfaceModel.wall_across) is thinner than THIN_PART of its diagonal (shells and plates measured
+# 0.012-0.07, the car, the bunny and blocks 0.10 and more; the spread of its surface across its thinnest
+# axis, tried first, left out shells bent more than 5 % of their diagonal); the wall behind a scan is
+# then measured where it lies, and is a wall up to THIN_WALL.
+THIN_PART, THIN_WALL = 0.08, 0.25
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
 THIN_WALL_NOISES = 5.0
@@ -511,8 +514,7 @@ def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: Sur
 def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
     """The pose shifted through the wall its scan lies on, onto the wall's other face, refined (a
     scan of one face of a thin plate or shell fits its back face nearly as well); [] without a wall."""
-    samples = surface.points[surface.view_order[:VIEW_SAMPLES]]
-    if np.sqrt(max(np.linalg.eigvalsh(np.cov(samples.T))[0], 0.0)) > THIN_PART * surface.diagonal:
+    if not surface.wall_across < THIN_PART * surface.diagonal:
         return []  # no thin plate or shell: every wall is a body's
     patch = frames.apply(state.T, medium[:TURN_POINTS])
     _, idx, found = surface.nearest_cell(patch, state.gate)
@@ -525,13 +527,12 @@ def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: fl
     pixel = PIXEL_MODEL_SPACINGS * surface.spacing * np.sqrt(len(surface.points) / len(samples))
     centre = patch.mean(axis=0)
     view = visibility.View(centre + surface.diagonal * normal, centre, pixel).framed(patch, margin=0)
-    thickness = visibility.wall_thickness(view, surface.points[samples], surface.normals[samples])
     pixels, _ = view.pixels(patch)
-    seen = thickness[pixels[pixels >= 0]]
-    seen = seen[np.isfinite(seen)]
-    if len(seen) < MIN_SCAN_POINTS or not np.median(seen) < 0.25 * surface.diagonal:
+    seen = visibility.median_wall_thickness(view, surface.points[samples], surface.normals[samples],
+                                            pixels[pixels >= 0], MIN_SCAN_POINTS)
+    if not seen < THIN_WALL * surface.diagonal:
         return []
-    shifted = frames.rigid(translation=-float(np.median(seen)) * normal) @ state.T
+    shifted = frames.rigid(translation=-seen * normal) @ state.T
     scores = inlier_scores(medium[:TURN_POINTS], surface, [state.T, shifted], state.gate)
     if scores[1] < RIVAL_FLOOR * scores[0]:  # a solid body, not a thin wall
         return []
@@ -681,8 +682,10 @@ class Judge:
                     and np.linalg.norm(frames.apply(a.T, centre[None]) - frames.apply(b.T, centre[None])) <= 2 * b.gate)
 
         turns = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
-        # A rival refined onto the best since it was found (widened, laid through the wall and back) is no rival.
-        rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) for t in [poses[0]] + turns)]
+        # A rival refined onto the best since it was found (widened, laid through the wall and back) is no
+        # rival; one on the other face of a wall thinner than two gates lies as near, and still is.
+        rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) and not self._faces_apart(t.T, poses[i].T)
+                                                        for t in [poses[0]] + turns)]
         poses = [poses[0]] + turns + [poses[i] for i in rest]
         weighed = [weighed[0]] + [self.evidence(t.T) for t in turns] + [weighed[i] for i in rest]
         turned = [False] + [True] * len(turns) + [False] * len(rest)
@@ -738,17 +741,29 @@ class Judge:
         when the viewpoint is only estimated."""
         if self.view is None or not self.source.startswith("estimated"):
             return False
+        looks = self._looks((best, rival))
+        if looks is None:
+            return False
+        weights = [np.clip(1 - (self._lookup(T)[2] / self.gate) ** 2, 0, 1) for T in (best, rival)]
+        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
+                    < self.options.rival_significance)
+
+    def _faces_apart(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """Whether poses a and b lay the scan on surfaces facing opposite ways (the two faces of a wall)."""
+        looks = self._looks((a, b))
+        return looks is not None and bool(looks[0] @ looks[1] < 0)
+
+    def _looks(self, poses):
+        """The direction each pose's matched surface faces (visibility.viewing_direction), or None when
+        one of them puts too few scan points on the model."""
         looks = []
-        weights = []
-        for T in (best, rival):
+        for T in poses:
             idx, found, r = self._lookup(T)
             matched = found & (r < self.gate)
             if matched.sum() < MIN_SCAN_POINTS:
-                return False
+                return None
             looks.append(visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3]))
-            weights.append(np.clip(1 - (r / self.gate) ** 2, 0, 1))
-        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
-                    < self.options.rival_significance)
+        return looks
 
     def _better(self, evidence: visibility.Evidence, than: visibility.Evidence) -> bool:
         return visibility.compare(evidence.cells, than.cells, CELL_VARIANCE_FLOOR) > self.options.rival_significance

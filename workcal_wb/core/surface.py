@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 from . import pointops
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
-from .visibility import FLAT_DEG
+from .visibility import FLAT_DEG, View, median_wall_thickness
 
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
 # the query point (so residuals are exact), coarse enough to keep the tree ~100k samples.
@@ -43,6 +43,9 @@ FILL_CHUNK = 1 << 15
 # the same cells filled).
 NEAR_SLAB_CELLS = 1 << 16
 FLAT_NEIGHBOURS, FLAT_BLOCK = 16, 1 << 12  # SurfaceModel.flat
+# SurfaceModel.wall_across looks through this many view samples, on pixels this many (thinned)
+# sample spacings wide: a surface covers its pixels, so the wall behind does not show through.
+WALL_SAMPLES, WALL_PIXEL_SPACINGS = 6000, 2.0
 # sample_cover weighs this many faces at a time (~300 bytes a face at once).
 COVER_BLOCK = 1 << 13
 # The finest grid (cell = one sample spacing) serves gates up to this many spacings; each coarser
@@ -633,6 +636,21 @@ class SurfaceModel:
             agree = np.einsum("ikj,ij->ik", self.normals[np.where(found, near, 0)], self.normals[part]) >= cos
             flat[start:start + FLAT_BLOCK] = (agree | ~found).all(axis=1)
         return flat
+
+    @cached_property
+    def wall_across(self) -> float:
+        """How thick (mm) the part's wall is, looked through along the axis its surface spreads least
+        along (median over WALL_SAMPLES samples on pixels WALL_PIXEL_SPACINGS spacings wide; inf when
+        it shows no wall): a plate's or a shell's thickness however far the shell bends (its spread
+        across that axis grows with its bend), a body's depth."""
+        from .symmetry import principal_axes
+
+        samples = self.view_order[:WALL_SAMPLES]
+        points, normals = self.points[samples], self.normals[samples]
+        pixel = WALL_PIXEL_SPACINGS * self.spacing * np.sqrt(len(self.points) / len(samples))
+        centre, axes, _ = principal_axes(points, np.ones(len(points)))
+        view = View(centre + self.diagonal * axes[:, 0], centre, pixel).framed(points, margin=0)
+        return median_wall_thickness(view, points, normals)
 
     @cached_property
     def centre(self) -> np.ndarray:

@@ -133,6 +133,16 @@ def wall_thickness(view: View, points: np.ndarray, normals: np.ndarray) -> np.nd
         return np.where(back > near, (back - near) * cos, np.inf)
 
 
+def median_wall_thickness(view: View, points: np.ndarray, normals: np.ndarray, pixels=None,
+                          least: int = 30) -> float:
+    """Median of wall_thickness over ``pixels`` (default: every pixel of the window) where there is a
+    wall; inf where fewer than ``least`` pixels show one."""
+    thickness = wall_thickness(view, points, normals)
+    thickness = thickness if pixels is None else thickness[pixels]
+    thickness = thickness[np.isfinite(thickness)]
+    return float(np.median(thickness)) if len(thickness) >= least else float("inf")
+
+
 def expected_surface(points: np.ndarray, normals: np.ndarray, viewpoint, pixel_mm: float,
                      depth_margin: float | None = None) -> np.ndarray:
     """Which samples of a surface (points with unit outward normals, one frame) a sensor at
