@@ -741,29 +741,27 @@ class Judge:
         when the viewpoint is only estimated."""
         if self.view is None or not self.source.startswith("estimated"):
             return False
-        looks = self._looks((best, rival))
-        if looks is None:
+        lookups = [self._lookup(T) for T in (best, rival)]
+        looks = [self._look(T, lookup) for T, lookup in zip((best, rival), lookups)]
+        if looks[0] is None or looks[1] is None:
             return False
-        weights = [np.clip(1 - (self._lookup(T)[2] / self.gate) ** 2, 0, 1) for T in (best, rival)]
+        weights = [np.clip(1 - (r / self.gate) ** 2, 0, 1) for _, _, r in lookups]
         return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
                     < self.options.rival_significance)
 
     def _faces_apart(self, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether poses a and b lay the scan on surfaces facing opposite ways (the two faces of a wall)."""
-        looks = self._looks((a, b))
-        return looks is not None and bool(looks[0] @ looks[1] < 0)
+        looks = [self._look(T, self._lookup(T)) for T in (a, b)]
+        return looks[0] is not None and looks[1] is not None and bool(looks[0] @ looks[1] < 0)
 
-    def _looks(self, poses):
-        """The direction each pose's matched surface faces (visibility.viewing_direction), or None when
-        one of them puts too few scan points on the model."""
-        looks = []
-        for T in poses:
-            idx, found, r = self._lookup(T)
-            matched = found & (r < self.gate)
-            if matched.sum() < MIN_SCAN_POINTS:
-                return None
-            looks.append(visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3]))
-        return looks
+    def _look(self, T: np.ndarray, lookup):
+        """The direction pose T's matched surface faces (visibility.viewing_direction), from its
+        lookup (_lookup); None when it puts too few scan points on the model."""
+        idx, found, r = lookup
+        matched = found & (r < self.gate)
+        if matched.sum() < MIN_SCAN_POINTS:
+            return None
+        return visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3])
 
     def _better(self, evidence: visibility.Evidence, than: visibility.Evidence) -> bool:
         return visibility.compare(evidence.cells, than.cells, CELL_VARIANCE_FLOOR) > self.options.rival_significance
