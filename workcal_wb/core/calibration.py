@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import frames, physics, pointops
+from .distortion import distortion
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
@@ -161,6 +162,13 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     report(0.75, "estimating the uncertainty")
     uncertainty = _uncertainty(scan, region_idx, (workpiece_surface, reference_surface), (U_match, V_match), W,
                                toolpath_points, options, match_options)
+    strained = _distortion(scan, region_idx, surfaces, (U_match, V_match), toolpath_points, options)
+    uncertainty.update(distortion_shift_mm=strained["shift_mm"], distortion_scale_pct=strained["scale_pct"],
+                       distortion_strain_pct=strained["largest_strain_pct"])
+    if strained["workpiece_own_pct"]:
+        result["warnings"].append(f"the workpiece reads a strain of {strained['workpiece_own_pct']:.2f} % against its "
+                                  "model that the reference does not: taken as the part's own (it differs from its "
+                                  "model), not the scanner's")
     gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm)
     status, reasons = _status(U_match, V_match, gates)
     report(1.0, f"calibration {status}")
@@ -325,6 +333,19 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     return out
 
 
+def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> dict:
+    """The scan's strain against the models and the shift of W it causes (distortion.distortion), on at
+    most as many points per region as a match is finished on."""
+    rng = np.random.default_rng(options.seed)
+    points = [scan.points[idx if len(idx) <= MatchOptions.max_fine_points
+                          else rng.choice(idx, MatchOptions.max_fine_points, replace=False)]
+              for idx in (regions["workpiece"], regions["reference"])]
+    targets = surfaces[0].points if toolpath_points is None else toolpath_points
+    # Twice the tolerance, or three RMS where the tolerance is below the noise (the gates fail it then).
+    gates = [max(2 * options.tolerance_mm, 3 * m.rms_mm) for m in matches]
+    return distortion(points, surfaces, [m.matrix for m in matches], targets, gates)
+
+
 def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, gate: float,
                 options: CalibrationOptions, match_options: dict) -> np.ndarray:
     """U refined on resampled region points from a nudged start, the way a match refines a given
@@ -367,6 +388,13 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
     value = uncertainty[key]
     gates.append({"name": f"uncertainty at the {where}", "value": value, "limit": tolerance,
                   "passed": bool(value <= tolerance), "unit": "mm"})
+    # A distortion's shift is a bias the bootstrap cannot see: it has what the spread leaves of the tolerance.
+    shift, limit = uncertainty["distortion_shift_mm"], max(tolerance - value, 0.0)
+    gates.append({"name": f"shift of W by the scan distortion at the {where}", "value": shift,
+                  "limit": round(limit, 4), "passed": bool(shift <= limit), "unit": "mm",
+                  "why": f"the scan is {uncertainty['distortion_scale_pct']:+.2f} % in scale and strained up to "
+                         f"{uncertainty['distortion_strain_pct']:.2f} % against the models: is the scanner's "
+                         "calibration off, or a model's size?"})
     return gates
 
 
@@ -374,7 +402,7 @@ def _status(U_match: MatchResult, V_match: MatchResult, gates: list) -> tuple[st
     reasons = [f"{role} match: {r}" for role, m in (("workpiece", U_match), ("reference", V_match)) for r in m.reasons]
     numeric_failures = [g for g in gates if not g["passed"] and g["unit"]]
     reasons += [f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} {g['unit']}"
-                for g in numeric_failures]
+                + (f"; {g['why']}" if "why" in g else "") for g in numeric_failures]
     if FAILED in (U_match.status, V_match.status) or numeric_failures:
         return FAILED, reasons
     if AMBIGUOUS in (U_match.status, V_match.status):

@@ -367,7 +367,10 @@ def _uncertainty_html(calibration: CalibrationResult) -> str:
               ("toolpath_median_mm", "median at the toolpath", "mm"),
               ("surface_bound_mm", "bound at the workpiece surface (largest)", "mm"),
               ("surface_median_mm", "median at the workpiece surface", "mm"),
-              ("rotation_bound_deg", "rotation bound", "deg")]
+              ("rotation_bound_deg", "rotation bound", "deg"),
+              ("distortion_shift_mm", "shift of W by the scan's distortion (largest)", "mm"),
+              ("distortion_scale_pct", "the scan's scale against the models", "%"),
+              ("distortion_strain_pct", "the scan's largest strain against the models", "%")]
     rows = [[_e(text), _num(u[key]), unit] for key, text, unit in labels if key in u]
     rows += [[_e(k), _num(v), ""] for k, v in u.items() if k not in {key for key, _, _ in labels} | {"method"}]
     note = f"<p class='note'>{_e(u['method'])}</p>" if "method" in u else ""

@@ -109,6 +109,8 @@ def _check_gates(gates: list, source: str) -> None:
         for key in ("value", "limit"):
             if key in gate and not _is(gate[key], _NUMBER + _TEXT):
                 raise InputError(f"{source}: quality gate {gate.get('name')!r}: {key} must be a number or a string")
+        if not _is(gate.get("why", ""), _TEXT):
+            raise InputError(f"{source}: quality gate {gate.get('name')!r}: why must be a string")
 
 
 @dataclass
@@ -204,7 +206,7 @@ class CalibrationResult:
     workpiece: MatchResult | None = None
     reference: MatchResult | None = None
     uncertainty: dict = field(default_factory=dict)
-    quality_gates: list = field(default_factory=list)  # {"name", "value", "limit", "passed", "unit"}
+    quality_gates: list = field(default_factory=list)  # {"name", "value", "limit", "passed", "unit"[, "why"]}
     tolerance_mm: float = 0.3
     inputs: dict = field(default_factory=dict)
     regions: dict = field(default_factory=dict)  # scan point indices per role and how they were found
@@ -248,6 +250,10 @@ class CalibrationResult:
             if key in self.uncertainty:
                 lines.append(f"  uncertainty {words}: {self.uncertainty[key]:.4f} mm "
                              f"(tolerance {self.tolerance_mm} mm)")
+        u = self.uncertainty
+        if all(f"distortion_{key}" in u for key in ("scale_pct", "strain_pct", "shift_mm")):
+            lines.append(f"  scan distortion: scale {u['distortion_scale_pct']:+.3f} %, strain up to "
+                         f"{u['distortion_strain_pct']:.3f} %, moving W up to {u['distortion_shift_mm']:.4f} mm")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
@@ -282,7 +288,8 @@ class CalibrationResult:
         if "status" not in data:
             raise InputError(f"{source}: has no status")
         values = _checked_fields(cls, data, source)
-        _check_numbers(values.get("uncertainty", {}), source, "uncertainty", lambda key: key.endswith(("_mm", "_deg")))
+        _check_numbers(values.get("uncertainty", {}), source, "uncertainty",
+                       lambda key: key.endswith(("_mm", "_deg", "_pct")))
         for name in ("warnings", "reasons"):
             _check_items(values.get(name, []), _TEXT, source, name)
         _check_gates(values.get("quality_gates", []), source)

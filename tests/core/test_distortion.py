@@ -1,0 +1,87 @@
+"""The scan's strain against its models (distortion.py), measured at the true poses of a cell scan."""
+import numpy as np
+import pytest
+
+from workcal_wb.core import frames
+from workcal_wb.core.distortion import distortion
+from workcal_wb.core.simulate.cell import CellSpec, cell_scan
+from workcal_wb.core.surface import SurfaceModel
+
+
+@pytest.fixture(scope="module")
+def cell():
+    cell = cell_scan(CellSpec(frame="arbitrary", seed=5))
+    return cell, [SurfaceModel(m, 0) for m in (cell.workpiece_model, cell.reference_model)]
+
+
+def _measured(cell, linear: np.ndarray) -> dict:
+    """The scan's regions moved by ``linear``, each about its own middle: the same strain to within a
+    rigid shift per region, which its match takes up (so the points stay as near their models at the
+    true poses as after a match: the fit is linearised)."""
+    scan, surfaces = cell
+    regions = [scan.cloud.points[scan.mask(role)] for role in ("workpiece", "reference")]
+    moved = [r.mean(axis=0) + (r - r.mean(axis=0)) @ linear.T for r in regions]
+    return distortion(moved, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
+
+
+def test_a_scale_is_measured(cell, monkeypatch):
+    """What a scale adds to what the undistorted scan shows (its noise: up to 0.01 %, counted here
+    however small) is that scale, to 3 %: the scanner's commonest error, shown by both objects."""
+    monkeypatch.setattr("workcal_wb.core.distortion.SIGNIFICANCE", 0.0)
+    undistorted, found = (_measured(cell, np.eye(3) * scale) for scale in (1.0, 1.001))
+    assert np.abs(undistorted["strain"]).max() < 1.2e-4 and undistorted["shift_mm"] < 0.05, undistorted
+    assert np.abs(found["strain"] - undistorted["strain"] - 0.001 * np.eye(3)).max() < 3e-5, found["strain"]
+    assert found["shift_mm"] > 0.2  # 0.1 % over the 300 mm between the objects, and their turns
+
+
+def test_a_strain_is_measured_as_far_as_the_reference_shows_it(cell):
+    """Stretches and shears as well as a scale: the L-shaped reference shows five of the six strains, so
+    what leaks from the sixth leaves the largest strain within a fifth."""
+    strain = np.array([[0.0008, 0.0004, 0], [0.0004, -0.0006, 0.0002], [0, 0.0002, 0.001]])
+    found = _measured(cell, np.eye(3) + strain)
+    largest = 100 * np.abs(np.linalg.eigvalsh(strain)).max()
+    assert found["largest_strain_pct"] == pytest.approx(largest, rel=0.2), found
+    assert found["shift_mm"] > 0.2
+
+
+def test_a_turned_scan_is_not_strained(cell):
+    """A whole-scan turn (0.06 deg) is a rigid motion: each match takes it up, W does not move."""
+    turn = frames.from_rotvec(np.array([0.0004, -0.0006, 0.0007]))[:3, :3]
+    found = _measured(cell, turn)
+    undistorted = _measured(cell, np.eye(3))
+    assert np.abs(found["strain"] - undistorted["strain"]).max() < 3e-5, found  # 1e-3 rad turns: 3 % of it
+    assert abs(found["shift_mm"] - undistorted["shift_mm"]) < 0.01, found
+
+
+def test_strains_a_small_part_beside_flat_faces_cannot_show_are_not_read_from_noise(monkeypatch):
+    """A 15 mm figurine beside the L-shaped reference: some stretches and shears are nearly rigid on both,
+    and read along those the undistorted scan's noise came out as a 0.2 % strain (a tester's figurine
+    scene: 1-4 %, W "moved" 1-2 mm, truly 0.02 mm).  Only the directions the scan shows count."""
+    scan = cell_scan(CellSpec(workpiece="figurine", frame="arbitrary", seed=1))
+    surfaces = [SurfaceModel(m, 0) for m in (scan.workpiece_model, scan.reference_model)]
+    regions = [scan.cloud.points[scan.mask(role)] for role in ("workpiece", "reference")]
+    found = distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
+    assert found["largest_strain_pct"] < 0.03 and found["shift_mm"] < 0.02, found
+    monkeypatch.setattr("workcal_wb.core.distortion.SHOWN_MM", 0.0)  # every direction counts
+    assert distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])["largest_strain_pct"] > 0.1
+
+
+def test_regions_with_no_point_near_their_models_measure_no_strain(cell):
+    scan, surfaces = cell
+    far = [scan.cloud.points[scan.mask(role)] + 50.0 for role in ("workpiece", "reference")]
+    found = distortion(far, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
+    assert found["shift_mm"] == 0.0 and not np.any(found["strain"])
+
+
+def test_a_strain_within_the_noise_of_few_points_is_none(cell):
+    """250 points per region: their noise alone reads as a strain of up to 0.1 %, not significant; a
+    0.3 % scale is."""
+    scan, surfaces = cell
+    rng = np.random.default_rng(3)
+    regions = [rng.choice(scan.cloud.points[scan.mask(role)], 250, replace=False) for role in ("workpiece", "reference")]
+    undistorted = distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
+    assert undistorted["shift_mm"] == 0.0 and not np.any(undistorted["strain"])
+    about = regions[0].mean(axis=0)
+    scaled = distortion([about + 1.003 * (r - about) for r in regions], surfaces, [scan.U, scan.V],
+                        surfaces[0].points, [1.0, 1.0])
+    assert scaled["scale_pct"] == pytest.approx(0.3, abs=0.05) and scaled["shift_mm"] > 0.3, scaled

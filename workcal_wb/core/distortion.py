@@ -1,0 +1,206 @@
+"""How far a scan's own distortion moves W: a scanner whose scale or axes are off.
+
+A scan that its scanner made 0.5 % too large still fits each model closely: each rigid match takes
+up what it can of the distortion, the residuals stay small and so does the bootstrap spread, which
+only sees the noise.  But W joins two matches that sit apart, and each took up the distortion about
+its own region: W moves by about the distortion times their distance (0.5 % of 300 mm is 1.5 mm), an
+"ok" with a wrong pose.  So the distortion is measured: one symmetric strain for the whole scan (its
+turning part is a rigid motion, harmless), fitted with one small rigid motion per region by
+point-to-plane least squares (Tukey-weighted), linearised at the final poses.  What each region's
+rigid motion takes up of that strain, differenced between the two regions at the toolpath, is how
+far W moves.  On cell scans scaled 0.05-0.5 %, stretched in depth or sheared 0.3 % (tests/core/
+test_cell_scenes.py) this is 74-106 % of how far W truly moved (the fit is linearised: 0.5 % reads
+74-83 %); on undistorted scans with veils, multipath, range noise and missing patches it stays
+under 0.05 mm.
+
+Whose strain is it?  The reference is the cell's standard (rigid, its model exact): along the strains
+it shows, its points tell the scanner's.  Along the others (two faces of a block seen do not show its
+scale) only the workpiece can tell, and its strain may be the scanner's or its own: a workpiece differs
+from its model often enough (clay, a casting; a real range scan of the bunny against the model zippered
+from several: 0.3-0.5 %), and that does not move W.  So the workpiece's strain counts, in doubt, unless
+it reads along the reference's strains what the reference does not (OWN_STRAIN): then it is its own.
+Counted as the scanner's, the bunny's refused 4 of 5 scenes whose W was right.
+
+The scale is always fitted.  A strain that keeps the volume counts only along the directions the
+points show it in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
+shears nearly rigid on both, and along those the fit would read a percent of strain out of the models'
+and the sensor's micrometres (it did on a 15 mm figurine: 1-4 %, W "moved" 1-2 mm, truly 0.02 mm).  A
+strain no point shows is not found: the check is blind to it, as every fit is.  Nor is a strain
+within the noise of its own fit (SIGNIFICANCE): 250 points a region read as 0.1 % from noise alone.
+
+Only the calibration can see a distortion: a lone match has no second region for it to move against,
+its pose is the best rigid fit of a scan of another size.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+from . import frames
+from .surface import SurfaceModel
+
+# The six components of a symmetric strain, as (row, column); (0, 1) stands for both (0, 1) and (1, 0).
+STRAIN_COMPONENTS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+_R2, _R3, _R6 = np.sqrt(2.0), np.sqrt(3.0), np.sqrt(6.0)
+# Strains of unit (Frobenius) size as columns of components: the scale, then five that keep the volume.
+STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
+                         [1 / _R2, -1 / _R2, 0, 0, 0, 0],
+                         [1 / _R6, 1 / _R6, -2 / _R6, 0, 0, 0],
+                         [0, 0, 0, 1 / _R2, 0, 0],
+                         [0, 0, 0, 0, 1 / _R2, 0],
+                         [0, 0, 0, 0, 0, 1 / _R2]]).T
+# A direction of strain counts when a unit strain along it, after the best rigid motion of each region,
+# moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.  Measured: the
+# car scenes' directions 3-25 mm (most over 5), the figurine scene's weakest four 0.5-3 mm.
+SHOWN_MM = 5.0
+# Tukey's biweight: a point weighs nothing beyond this many robust scales (1.4826 x the median absolute
+# residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
+# side: weighed fully they read as the scan growing (0.05-0.1 % on scans with veils and noise 0.2 mm).
+TUKEY_SCALES = 4.685
+REWEIGHTS = 3
+# A strain counts when the squares it explains are beyond this quantile of what noise explains (chi-square).
+SIGNIFICANCE = 0.999
+# A workpiece whose strain along the reference's differs from what the reference reads by more than this
+# (unit-size strain) differs from its model.  Measured: a scanner's 0.2-0.3 % scale read alike to 0.05 %
+# on the two objects (a shear less alike, to 0.18 %: then the reference alone decides, and refused each
+# such scan rightly; a 1 % scale 0.06 % apart, the fit being linearised: refused, narrowly, 0.28 mm for
+# 0.24 mm left); the bunny's range scans against their model 0.08-0.36 %.
+OWN_STRAIN = 5e-4
+# A region with fewer points near its model than this shows no strain (the matches' gates fail it anyway).
+MIN_POINTS = 50
+
+
+def distortion(regions, surfaces, poses, targets: np.ndarray, gates) -> dict:
+    """The scan's strain and the largest shift of W at ``targets`` (model X points) it causes.
+
+    ``regions``: the scan points of the workpiece and the reference; ``surfaces``: their models;
+    ``poses``: U and V (model to scan); ``gates``: how far (mm) a point of each may lie from its model.
+    """
+    centre = np.mean(np.concatenate(regions), axis=0)
+    blocks = [_linearised(points, surface, pose, gate, centre)
+              for points, surface, pose, gate in zip(regions, surfaces, poses, gates)]
+    if min(len(residuals) for residuals, _, _ in blocks) < MIN_POINTS:
+        return {"strain": np.zeros((3, 3)), "scale_pct": 0.0, "largest_strain_pct": 0.0, "shift_mm": 0.0,
+                "workpiece_own_pct": 0.0}
+    on_reference, shown, reference_weights = _measured(blocks[1:])
+    on_workpiece, _, _ = _measured(blocks[:1])
+    on_both, _, weights = _measured(blocks)
+    # The reference is the cell's standard: along the strains it shows, what it shows is the scanner's.
+    # Along the others only the workpiece can tell, and it may be the scanner or the model: counted, in
+    # doubt, unless the workpiece reads along the reference's strains what the reference does not: then
+    # it differs from its model (a clay, a real range scan), and its strain is its own.
+    own = _disagree(on_workpiece, blocks[1:], reference_weights, shown) > OWN_STRAIN
+    coefficients = shown @ (shown.T @ on_reference) + (0 if own else on_both - shown @ (shown.T @ on_both))
+    # What each match's rigid motion takes up of the strain: its weighted least-squares answer to it alone.
+    taken_up = [_rigid(rigid, strains @ coefficients, w) for (_, strains, rigid), w in zip(blocks, weights)]
+    difference = taken_up[0] - taken_up[1]
+    at = frames.apply(poses[0], targets) - centre
+    shift = np.linalg.norm(np.cross(difference[:3], at) + difference[3:], axis=1)
+    strain = np.zeros((3, 3))
+    for value, (row, column) in zip(STRAIN_BASIS @ coefficients, STRAIN_COMPONENTS):
+        strain[row, column] = strain[column, row] = -value  # the fit found the step undoing the strain
+    return {"strain": strain, "scale_pct": float(100 * np.trace(strain) / 3),
+            "largest_strain_pct": float(100 * np.abs(np.linalg.eigvalsh(strain)).max()),
+            "shift_mm": float(shift.max()),
+            "workpiece_own_pct": float(100 * np.linalg.norm(on_workpiece)) if own else 0.0}
+
+
+def _measured(blocks):
+    """The strain (STRAIN_BASIS coefficients) the regions' points show, the directions it was measured
+    along (orthonormal columns) and the points' final weights; none when within the noise of its fit."""
+    weights = [np.ones(len(residuals)) for residuals, _, _ in blocks]
+    for round_ in range(REWEIGHTS + 1):
+        coefficients, explained, directions = _strain(blocks, weights)
+        left = [_left(block, coefficients, w) for block, w in zip(blocks, weights)]
+        if round_ < REWEIGHTS:
+            weights = [_biweights(e) for e in left]
+    weight, residuals = np.concatenate(weights), np.concatenate(left)
+    noise = np.sum(weight * residuals ** 2) / max(np.sum(weight) - 6 * (len(blocks) + 1), 1.0)
+    if not explained > noise * chi2.ppf(SIGNIFICANCE, max(directions.shape[1], 1)):
+        coefficients = np.zeros(len(STRAIN_COMPONENTS))
+    return coefficients, directions, weights
+
+
+def _disagree(strain: np.ndarray, blocks, weights, shown: np.ndarray) -> float:
+    """How far ``strain`` along the directions ``shown`` lies from what the points read along them,
+    the strain's other components held (the reference does not show a scale of 1 %, but it leaks into
+    what it reads along the strains it shows: read freely, they disagreed with a workpiece's 0.07 %)."""
+    if not shown.shape[1]:
+        return 0.0
+    information, gradient, _ = _information(blocks, weights)
+    others = np.linalg.svd(np.eye(6) - shown @ shown.T)[0][:, :6 - shown.shape[1]]
+    held = others @ (others.T @ strain)
+    read = _solve(shown.T @ information @ shown, shown.T @ (gradient - information @ held))
+    return float(np.linalg.norm(shown.T @ strain - read))
+
+
+def _information(blocks, weights) -> tuple[np.ndarray, np.ndarray, float]:
+    """The weighted normal equations of the strain, each region's rigid motion eliminated, and the
+    points' total weight."""
+    information, gradient, total = np.zeros((6, 6)), np.zeros(6), 0.0
+    for (residuals, strains, rigid), w in zip(blocks, weights):
+        cross = strains.T @ (rigid * w[:, None])
+        through_rigid = _solve(rigid.T @ (rigid * w[:, None]), np.column_stack([cross.T, rigid.T @ (w * residuals)]))
+        information += strains.T @ (strains * w[:, None]) - cross @ through_rigid[:, :6]
+        gradient -= strains.T @ (w * residuals) - cross @ through_rigid[:, 6]
+        total += w.sum()
+    return information, gradient, total
+
+
+def _strain(blocks, weights) -> tuple[np.ndarray, float, np.ndarray]:
+    """The strain (STRAIN_BASIS coefficients) that with a rigid motion per region best undoes the
+    residuals, within the scale and the volume-keeping directions the points show (SHOWN_MM); the
+    weighted squares it explains, and those directions."""
+    information, gradient, total = _information(blocks, weights)
+    scale, volume = information[0, 0], information[1:, 1:]
+    if not scale > 0:  # every point weighs nothing: nothing to measure
+        return np.zeros(6), 0.0, np.zeros((6, 0))
+    values, vectors = np.linalg.eigh(volume - np.outer(information[1:, 0], information[0, 1:]) / scale)
+    shown = np.sqrt(np.maximum(values, 0.0) / total) >= SHOWN_MM
+    directions = np.zeros((6, 1 + shown.sum()))
+    directions[0, 0] = 1.0
+    directions[1:, 1:] = vectors[:, shown]
+    if np.sqrt(scale / total) < SHOWN_MM:
+        directions = directions[:, 1:]
+    reduced = directions.T @ information @ directions
+    coefficients = _solve(reduced, directions.T @ gradient)
+    return directions @ coefficients, coefficients @ reduced @ coefficients, directions
+
+
+def _left(block, coefficients: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """A region's residuals once the strain and the region's best rigid motion are undone."""
+    residuals, strains, rigid = block
+    strained = residuals + strains @ coefficients
+    return strained + rigid @ _rigid(rigid, -strained, weights)
+
+
+def _rigid(rigid: np.ndarray, target: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """The small rigid motion (turn, shift) that best moves the points by ``target`` along their normals."""
+    return _solve(rigid.T @ (rigid * weights[:, None]), rigid.T @ (weights * target))
+
+
+def _solve(matrix: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """A symmetric system; a motion the points leave free (a sphere's turns) gets the least-norm answer."""
+    return np.linalg.lstsq(matrix, right, rcond=1e-12)[0]
+
+
+def _biweights(residuals: np.ndarray) -> np.ndarray:
+    """Tukey's biweight of each residual of one region, on the region's robust scale."""
+    scale = 1.4826 * np.median(np.abs(residuals - np.median(residuals)))
+    u = residuals / (TUKEY_SCALES * scale) if scale > 0 else np.zeros(len(residuals))
+    return np.where(np.abs(u) < 1, (1 - u ** 2) ** 2, 0.0)
+
+
+def _linearised(points: np.ndarray, surface: SurfaceModel, pose: np.ndarray, gate: float, centre: np.ndarray):
+    """Point-to-plane residuals of the points within ``gate`` of their model's tangent planes at ``pose``,
+    and their derivatives (in the scan's frame, about ``centre``) by the strains of STRAIN_BASIS and by a
+    small rigid motion.  The nearest sample may lie up to a spacing beside a point's foot."""
+    in_model = frames.apply(frames.invert(pose), points)
+    _, index, found = surface.nearest(in_model, gate + surface.spacing)
+    residuals = surface.plane_residuals(in_model[found], index[found])
+    near = np.abs(residuals) <= gate
+    x = points[found][near] - centre
+    normals = surface.normals[index[found][near]] @ pose[:3, :3].T
+    components = np.column_stack([normals[:, r] * x[:, c] + (normals[:, c] * x[:, r] if r != c else 0)
+                                  for r, c in STRAIN_COMPONENTS])
+    return residuals[near], components @ STRAIN_BASIS, np.column_stack([np.cross(x, normals), normals])
