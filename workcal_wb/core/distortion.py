@@ -37,6 +37,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from . import frames
+from .refine import MAD_TO_SIGMA
 from .surface import SurfaceModel
 
 # The six components of a symmetric strain, as (row, column); (0, 1) stands for both (0, 1) and (1, 0).
@@ -53,8 +54,8 @@ STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
 # moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.  Measured: the
 # car scenes' directions 3-25 mm (most over 5), the figurine scene's weakest four 0.5-3 mm.
 SHOWN_MM = 5.0
-# Tukey's biweight: a point weighs nothing beyond this many robust scales (1.4826 x the median absolute
-# residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
+# Tukey's biweight: a point weighs nothing beyond this many robust scales (refine.MAD_TO_SIGMA x the median
+# absolute residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
 # side: weighed fully they read as the scan growing (0.05-0.1 % on scans with veils and noise 0.2 mm).
 TUKEY_SCALES = 4.685
 REWEIGHTS = 3
@@ -186,7 +187,7 @@ def _solve(matrix: np.ndarray, right: np.ndarray) -> np.ndarray:
 
 def _biweights(residuals: np.ndarray) -> np.ndarray:
     """Tukey's biweight of each residual of one region, on the region's robust scale."""
-    scale = 1.4826 * np.median(np.abs(residuals - np.median(residuals)))
+    scale = MAD_TO_SIGMA * np.median(np.abs(residuals - np.median(residuals)))
     u = residuals / (TUKEY_SCALES * scale) if scale > 0 else np.zeros(len(residuals))
     return np.where(np.abs(u) < 1, (1 - u ** 2) ** 2, 0.0)
 
