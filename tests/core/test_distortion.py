@@ -85,3 +85,16 @@ def test_a_strain_within_the_noise_of_few_points_is_none(cell):
     scaled = distortion([about + 1.003 * (r - about) for r in regions], surfaces, [scan.U, scan.V],
                         surfaces[0].points, [1.0, 1.0])
     assert scaled["scale_pct"] == pytest.approx(0.3, abs=0.05) and scaled["shift_mm"] > 0.3, scaled
+
+
+def test_the_check_costs_a_calibrate_process_no_scipy_stats():
+    """scipy.stats for one chi-square quantile cost every calibrate process 0.22 s and 23 MB at start-up;
+    scipy.special, loaded anyway, has it."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    done = subprocess.run([sys.executable, "-c", "import sys; import workcal_wb.core.calibration; "
+                           "print('scipy.stats' in sys.modules)"], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0 and done.stdout.strip() == "False", done.stderr[-2000:]

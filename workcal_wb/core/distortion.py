@@ -34,7 +34,7 @@ its pose is the best rigid fit of a scan of another size.
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from . import frames
 from .refine import MAD_TO_SIGMA
@@ -117,7 +117,7 @@ def _measured(blocks):
             weights = [_biweights(e) for e in left]
     weight, residuals = np.concatenate(weights), np.concatenate(left)
     noise = np.sum(weight * residuals ** 2) / max(np.sum(weight) - 6 * (len(blocks) + 1), 1.0)
-    if not explained > noise * chi2.ppf(SIGNIFICANCE, max(directions.shape[1], 1)):
+    if not explained > noise * chdtri(max(directions.shape[1], 1), 1 - SIGNIFICANCE):  # chi-square quantile
         coefficients = np.zeros(len(STRAIN_COMPONENTS))
     return coefficients, directions, weights
 
