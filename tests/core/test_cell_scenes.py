@@ -252,6 +252,21 @@ def test_a_scan_distorted_by_its_scanner_fails_and_says_so(seed, strain):
     assert 0.7 * displacement < u["distortion_shift_mm"] < 1.2 * displacement
 
 
+@pytest.mark.parametrize("seed, scale", [(1, 0.02), (2, -0.02)])
+def test_a_scan_scaled_two_percent_is_refused_for_its_scale(seed, scale):
+    """A 2 % scale put the reference's ends beyond the check's gate (twice the tolerance, 0.6 mm), its
+    middle read no strain, and the workpiece's 2 % went as the part's own: the check read nothing, with W
+    3.8-4.6 mm off (refused here for other reasons, by a hair).  The check keeps the points each match was
+    finished on, and no part differs from its model by a scale of 2 %."""
+    cell = cell_scan(CellSpec(frame="sensor", seed=seed))
+    result = _calibrated(_distorted(cell, np.eye(3) * scale, seed))
+    _, displacement = _errors(result.W, cell.W, cell.workpiece_model)
+    u = result.uncertainty
+    assert u["distortion_scale_pct"] == pytest.approx(100 * scale, rel=0.05), u
+    assert u["distortion_shift_mm"] > 0.7 * displacement, (u, displacement)
+    assert result.status == "failed" and any("scanner's calibration" in r for r in result.reasons), result.reasons
+
+
 def test_a_scan_within_a_good_scanners_accuracy_stays_ok():
     """An undistorted scan and one 0.05 % too large (a good structured-light scanner's accuracy) are
     "ok", and W is off by no more than the distortion's share of the tolerance and the spread allow."""

@@ -44,6 +44,22 @@ def test_a_strain_is_measured_as_far_as_the_reference_shows_it(cell):
     assert found["shift_mm"] > 0.2
 
 
+@pytest.mark.parametrize("linear, scale, largest", [
+    (np.diag([1.0, 1.0, 1.01]), 1 / 3, 1.0),  # read as 0.44 % and 1.09 % once
+    (np.eye(3) * 1.02, 2.0, 2.0),  # read as 1.39 % once, and the workpiece's 2 % taken as its own
+    (np.eye(3) + np.array([[0.008, 0.004, 0], [0.004, -0.006, 0.002], [0, 0.002, 0.01]]), 0.4, 1.04),
+], ids=["depth 1 %", "scale 2 %", "mixed 1 %"])
+def test_a_large_strain_is_read_whole_not_taken_as_the_parts_own(cell, linear, scale, largest):
+    """Linearised once at the matched poses, a strain of a percent read short: it moves the ends of a
+    region beyond the gates, and what is left near the middle shows less of it; the workpiece then read
+    more than the reference and its strain went as its own.  The fit is linearised again where each
+    step leaves the points."""
+    found = _measured(cell, linear)
+    assert found["scale_pct"] == pytest.approx(scale, rel=0.05), found
+    assert found["largest_strain_pct"] == pytest.approx(largest, rel=0.05), found
+    assert found["workpiece_own_pct"] == 0.0
+
+
 def test_a_turned_scan_is_not_strained(cell):
     """A whole-scan turn (0.06 deg) is a rigid motion: each match takes it up, W does not move."""
     turn = frames.from_rotvec(np.array([0.0004, -0.0006, 0.0007]))[:3, :3]
