@@ -104,15 +104,31 @@ def test_a_rival_the_scan_alone_cannot_reject_is_ruled_out_by_free_space():
     assert any(c.get("ruled_out_by") == "free space" for c in result.reference.candidates)
 
 
-def test_platform_contact_rules_out_rivals_and_a_tie_nothing_breaks_stays_ambiguous():
+def test_platform_contact_rules_out_rivals_that_sink_through_it():
     """Seen low from the L-block's outer side, rivals turned 90 and 120 degrees sink through the
-    platform and are ruled out; the one turned half round stands on it and leaves free the space the
-    scan saw through, so the calibration stays ambiguous and says what would break the tie."""
+    platform and are ruled out."""
     cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))
     result = _calibrated(cell, scanner_origin=tuple(cell.scanner_origin))
-    assert result.status == "ambiguous"
     assert any("ruled out by platform contact: it sinks" in c for c in result.reference.constraints)
-    assert any("to break the tie, scan again from where" in r for r in result.reasons), result.reasons
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_tie_nothing_breaks_is_never_ok_with_the_reference_turned_over(seed):
+    """The same view: the L-block turned half round (about a level axis 20 deg off its principal one, 33 mm
+    beside its centre) stands on the platform and leaves free the space the scan saw through, so nothing
+    breaks the tie.  Found at stop 34: calibrated with seeds 1 and 2 on Debian 12, and seed 0 on Debian 13
+    (an AMD EPYC machine; earlier machines gave ambiguous at seed 0), the search listed the turned pose as
+    best and three rivals that sink, never the right pose: the constraints ruled the three out and "ok"
+    came back with V 180 deg off.  Constraints break a tie only between few listed poses (MAX_RULED_OUT)."""
+    cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))
+    result = _calibrated(cell, scanner_origin=tuple(cell.scanner_origin), seed=seed)
+    if result.status == "ok":
+        assert frames.rotation_between_deg(result.V, cell.V) < 1.0, "ok with the reference turned over"
+    elif result.status == "ambiguous":
+        assert any("to break the tie, scan again from where" in r or "others the search did not list" in r
+                   for r in result.reasons), result.reasons
+    else:  # seed 3 on Debian 13: every listed pose, best included, sinks through the platform
+        assert result.status == "failed" and any("through the platform" in r for r in result.reasons), result.reasons
 
 
 def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():

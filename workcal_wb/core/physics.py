@@ -32,6 +32,12 @@ SAMPLES, PIXEL_SAMPLE_SPACINGS, PIXEL_SCAN_SPACINGS = 12000, 2.0, 2.0
 ERODE_PIXELS = {"known": 1, "estimated": 3}
 # Scan points this far behind the placed surface (mm, and at least DEPTH_PIXELS pixels) were seen through it.
 DEPTH_MARGIN_MM, DEPTH_PIXELS = 5.0, 2.0
+# A tie is broken by the constraints only when the search listed at most this many rivals: a view the part fits
+# in more ways is one whose list of them is a sample, not all of them.  Found (stop 34): an L-block seen low from
+# its outer side; rivals turned 90 and 120 deg (three) sank through the platform, the right pose, half round
+# from the search's best, was never listed, and "ok" came back with V 180 deg off (the 60 bench scenes rule out
+# no rival at all).
+MAX_RULED_OUT = 2
 # A rival breaks free space when it contradicts at least this many more view pixels than the best,
 # and this share of its own interior more.
 MIN_PIXELS, MIN_SHARE = 25, 0.1
@@ -149,7 +155,12 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
         listed[i - 1]["ruled_out_by"] = why[0]
         match.constraints.append(f"a rival pose {frames.rotation_between_deg(poses[0], poses[i]):.1f} deg away was "
                                  f"ruled out by {why[0]}: {why[1]}")
-    if rivals and not survivors and match.ties:
+    if rivals and not survivors and match.ties and len(rivals) > MAX_RULED_OUT:
+        match.reasons.append(f"the view fits the {role} in {len(rivals) + 1} ways; the platform and free space rule "
+                             f"out the {len(rivals)} the search listed, but a view that fits it in so many ways may "
+                             "fit it in others the search did not list: scan again from where the part shows more of "
+                             "its shape, or give the regions")
+    elif rivals and not survivors and match.ties:
         match.reasons = [r for r in match.reasons if r not in match.ties]
         match.ties = []
         if not match.reasons and match.status == AMBIGUOUS:
