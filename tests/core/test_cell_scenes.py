@@ -4,7 +4,7 @@ simulate.cell with exact truth; every calibration uses automatic regions."""
 import numpy as np
 import pytest
 
-from workcal_wb.core import frames, pointops
+from workcal_wb.core import calibration, frames, physics, pointops
 from workcal_wb.core.edges import centre_on_edges
 from workcal_wb.core.regions import LINK_SPACINGS, _clusters, _near, find_platform
 from workcal_wb.core.surface import SurfaceModel
@@ -104,31 +104,56 @@ def test_a_rival_the_scan_alone_cannot_reject_is_ruled_out_by_free_space():
     assert any(c.get("ruled_out_by") == "free space" for c in result.reference.candidates)
 
 
-def test_platform_contact_rules_out_rivals_that_sink_through_it():
-    """Seen low from the L-block's outer side, rivals turned 90 and 120 degrees sink through the
-    platform and are ruled out."""
-    cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))
+def _with_sunk_rivals(monkeypatch, cell, count):
+    """Calibrations whose reference match lists ``count`` rivals tied with the best: the best pose
+    lowered 15, 20, 25 ... mm into the platform."""
+    found = calibration._refit
+
+    def refit(scan, idx, surface, first, matched, options, role):
+        m = found(scan, idx, surface, first, matched, options, role)
+        if role == "reference" and m.status == "ok":
+            for k in range(count):
+                sunk = frames.rigid(translation=-(15.0 + 5 * k) * cell.up) @ np.asarray(m.matrix)
+                m.candidates.append({"matrix": sunk.tolist(), "rival": True})
+            m.reasons.append(f"{count} clearly different pose(s) explain the view about as well")
+            m.ties.append(m.reasons[-1])
+            m.status = "ambiguous"
+        return m
+
+    monkeypatch.setattr(calibration, "_refit", refit)
+
+
+def test_platform_contact_rules_out_rivals_that_sink_through_it(monkeypatch):
+    cell = cell_scan(CellSpec(seed=3))
+    _with_sunk_rivals(monkeypatch, cell, 2)
     result = _calibrated(cell, scanner_origin=tuple(cell.scanner_origin))
-    assert any("ruled out by platform contact: it sinks" in c for c in result.reference.constraints)
+    assert result.status == "ok", result.reasons
+    assert sum("ruled out by platform contact: it sinks" in c for c in result.reference.constraints) == 2
+    assert frames.rotation_between_deg(result.V, cell.V) < 0.05
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_a_tie_nothing_breaks_is_never_ok_with_the_reference_turned_over(seed):
-    """The same view: the L-block turned half round (about a level axis 20 deg off its principal one, 33 mm
-    beside its centre) stands on the platform and leaves free the space the scan saw through, so nothing
-    breaks the tie.  Found at stop 34: calibrated with seeds 1 and 2 on Debian 12, and seed 0 on Debian 13
-    (an AMD EPYC machine; earlier machines gave ambiguous at seed 0), the search listed the turned pose as
-    best and three rivals that sink, never the right pose: the constraints ruled the three out and "ok"
-    came back with V 180 deg off.  Constraints break a tie only between few listed poses (MAX_RULED_OUT)."""
+def test_rivals_past_max_ruled_out_leave_the_tie_standing_though_all_sink(monkeypatch):
+    """A view that fits the reference in many listed ways may fit it in one the search did not list."""
+    cell = cell_scan(CellSpec(seed=3))
+    _with_sunk_rivals(monkeypatch, cell, physics.MAX_RULED_OUT + 1)
+    result = _calibrated(cell, scanner_origin=tuple(cell.scanner_origin))
+    assert result.status == "ambiguous"
+    assert any("others the search did not list" in r for r in result.reasons), result.reasons
+
+
+def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_over():
+    """Found at stop 34: seen low from its outer side, the L-block calibrated "ok" with V 180 deg off
+    (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC
+    hypothesis ranked 4th to 11th by its rough score among wrong turns and was never refined, and the
+    platform ruled out the three rivals listed.  Rough poses are now taken a few steps first (match.
+    PRE_REFINED): the right pose is found with most seeds (4 of 4 on Debian 12, 3 of 4 on Debian 13 here);
+    Debian 13's seed 3 still misses it and stays ambiguous (three rivals half a turn from its best: one
+    sinks through the platform, two stand on it)."""
     cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))
-    result = _calibrated(cell, scanner_origin=tuple(cell.scanner_origin), seed=seed)
-    if result.status == "ok":
-        assert frames.rotation_between_deg(result.V, cell.V) < 1.0, "ok with the reference turned over"
-    elif result.status == "ambiguous":
-        assert any("to break the tie, scan again from where" in r or "others the search did not list" in r
-                   for r in result.reasons), result.reasons
-    else:  # seed 3 on Debian 13: every listed pose, best included, sinks through the platform
-        assert result.status == "failed" and any("through the platform" in r for r in result.reasons), result.reasons
+    results = [_calibrated(cell, scanner_origin=tuple(cell.scanner_origin), seed=seed) for seed in range(4)]
+    ok = [r for r in results if r.status == "ok"]
+    assert all(frames.rotation_between_deg(r.V, cell.V) < 0.05 for r in ok), "ok with the reference turned over"
+    assert len(ok) >= 2, [r.reasons for r in results]
 
 
 def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():
