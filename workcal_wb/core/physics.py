@@ -155,16 +155,17 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
         listed[i - 1]["ruled_out_by"] = why[0]
         match.constraints.append(f"a rival pose {frames.rotation_between_deg(poses[0], poses[i]):.1f} deg away was "
                                  f"ruled out by {why[0]}: {why[1]}")
-    if rivals and not survivors and match.ties and len(rivals) > MAX_RULED_OUT:
-        match.reasons.append(f"the view fits the {role} in {len(rivals) + 1} ways; the platform and free space rule "
-                             f"out the {len(rivals)} the search listed, but a view that fits it in so many ways may "
-                             "fit it in others the search did not list: scan again from where the part shows more of "
-                             "its shape, or give the regions")
-    elif rivals and not survivors and match.ties:
-        match.reasons = [r for r in match.reasons if r not in match.ties]
-        match.ties = []
-        if not match.reasons and match.status == AMBIGUOUS:
-            match.status = OK
+    if rivals and not survivors and match.ties:
+        if len(rivals) > MAX_RULED_OUT:
+            match.reasons.append(f"the view fits the {role} in {len(rivals) + 1} ways; the platform and free space "
+                                 f"rule out the {len(rivals)} the search listed, but a view that fits it in so many "
+                                 "ways may fit it in others the search did not list: scan again from where the part "
+                                 "shows more of its shape, or give the regions")
+        else:
+            match.reasons = [r for r in match.reasons if r not in match.ties]
+            match.ties = []
+            if not match.reasons and match.status == AMBIGUOUS:
+                match.status = OK
     elif survivors and match.ties:
         match.reasons.append(_what_would_break(surface, poses[0], poses[survivors[0]], role))
     if checks[0]["sinks"] and match.status == OK:
