@@ -99,6 +99,24 @@ def test_r_arcs_short_and_long_way():
     assert arcs.signed_sweep([10.0, 0, 0], long.end, long.centre, long.normal, True)[0] == pytest.approx(1.5 * np.pi)
 
 
+@pytest.mark.parametrize("plane, axis", [("G17", 2), ("G18", 1), ("G19", 0)])
+@pytest.mark.parametrize("code", ["G2", "G3"])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_r_arcs_in_every_plane_centre_at_r_from_both_ends_the_way_r_says(plane, axis, code, sign):
+    """An R arc's centre (computed in plain floats, a plane at a time) lies |R| from its start and its
+    end in the arc's plane, and the arc turns the short way for R > 0, the long way for R < 0, in the
+    direction G2/G3 name about the plane's normal."""
+    tp = read(f"G0 X1 Y2 Z3\n{plane} {code} X7 Y-2 Z8 R{sign * 6} F100\n")
+    start, arc = tp.moves[0].end, tp.moves[1]
+    in_plane = [k for k in range(3) if k != axis]
+    for point in (start, arc.end):
+        assert np.linalg.norm((point - arc.centre)[in_plane]) == pytest.approx(6.0, abs=1e-9)
+    assert arc.normal[axis] == 1.0
+    sweep = arcs.signed_sweep(start, arc.end, arc.centre, arc.normal, code == "G3")[0]
+    assert np.sign(sweep) == (1 if code == "G3" else -1)
+    assert (abs(sweep) <= np.pi) == (sign > 0)
+
+
 def test_absolute_arc_centres_g90_1():
     tp = read("G0 X10 Y0 Z0\nG90.1 G3 X0 Y10 I0 J0 F100\n")
     np.testing.assert_allclose(tp.moves[1].centre, [0, 0, 0])

@@ -148,6 +148,8 @@ def _read(lines, source: str, units: str, rotary: str, block_delete, dwell_p: st
             state.warnings.append(f"{source}: line {number}: the program ended at {ended}; "
                                   "the lines after it were not read")
             break
+        if not pending and _fast_move(text, state, number):  # most lines of a long file: nothing else in them
+            continue
         if text[0] == "%":
             if percent and state.count + len(state.events):
                 ended = f"the closing % (line {number})"
@@ -174,7 +176,7 @@ def _read(lines, source: str, units: str, rotary: str, block_delete, dwell_p: st
         if "*" in text:
             text = _checked(text, source, number)
         upper = text.upper()
-        if not pending and _fast_move(upper, state, number):
+        if not pending and upper != text and _fast_move(upper, state, number):
             continue
         before = state.count
         end_code = _block(upper, state, source, number)
@@ -192,7 +194,7 @@ def _read(lines, source: str, units: str, rotary: str, block_delete, dwell_p: st
 def _fast_move(text: str, state: _State, number: int) -> bool:
     """Read a plain straight move in absolute mode with every axis known; False leaves it to ``_block``."""
     m = _FAST.fullmatch(text)
-    if m is None or not state.absolute or not state.count or math.isnan(sum(state.position)):
+    if m is None or not state.absolute or not state.kind or math.isnan(sum(state.position)):  # kind: any move yet
         return False
     code, x, y, z, f = m.groups()
     motion = MOTION[int(code)] if code else state.motion
@@ -462,7 +464,7 @@ def _motion(g, words: dict, state: _State, source: str, number: int) -> None:
     if arc:
         if any(map(math.isnan, start)):
             raise InputError(f"{source}: line {number}: arc before the start position is known (give X, Y and Z first)")
-        centre, normal = _arc_centre(words, state, np.array(start), np.array(state.position), source, number)
+        centre, normal = _arc_centre(words, state, start, list(state.position), source, number)
         state.centres.append(centre)
         state.normals.append(normal)
     _append(state, kind, state.position, math.nan if kind == RAPID else state.feed, number)
@@ -494,10 +496,11 @@ def _tool_axis(words: dict, state: _State, arc: bool, source: str, number: int) 
             state.axis_source = name
 
 
-def _arc_centre(words: dict, state: _State, start: np.ndarray, end: np.ndarray, source: str, number: int):
-    """Centre (in the start's plane) and unit normal of a G2/G3 arc, checked for a consistent radius."""
+def _arc_centre(words: dict, state: _State, start: list, end: list, source: str, number: int):
+    """Centre (in the start's plane) and unit normal of a G2/G3 arc, checked for a consistent radius.
+    In plain floats: numpy's calls on 3-vectors made an arc cost as much as a hundred straight moves."""
     normal_axis, offset_letters = PLANES[state.plane]
-    normal = np.zeros(3)
+    normal = [0.0, 0.0, 0.0]
     normal[normal_axis] = 1.0
     for letter in "IJK":  # an off-plane offset of zero says nothing (FreeCAD's posts write K0 in G17 arcs)
         if letter not in offset_letters and words.get(letter) == 0:
@@ -511,10 +514,10 @@ def _arc_centre(words: dict, state: _State, start: np.ndarray, end: np.ndarray, 
         raise InputError(f"{source}: line {number}: R and {'/'.join(offsets)} in one arc: give the radius or the "
                          "centre, not both (they may describe different arcs)")
     if "R" in words:
-        centre = _centre_from_radius(words.pop("R") * state.mm_per_unit, state.motion, start, end, normal,
+        centre = _centre_from_radius(words.pop("R") * state.mm_per_unit, state.motion, start, end, normal_axis,
                                      source, number)
     elif offsets:
-        centre = start.copy()
+        centre = list(start)
         for letter in offset_letters:
             value = words.pop(letter, 0.0) * state.mm_per_unit
             axis = OFFSET_AXIS[letter]
@@ -522,7 +525,7 @@ def _arc_centre(words: dict, state: _State, start: np.ndarray, end: np.ndarray, 
     else:
         raise InputError(f"{source}: line {number}: arc without centre ({' or '.join(offset_letters)} "
                          f"for G{state.plane}) or radius R")
-    r_start, r_end = arcs.radius(start, centre, normal), arcs.radius(end, centre, normal)
+    r_start, r_end = _radius(start, centre, normal_axis), _radius(end, centre, normal_axis)
     if r_start < ARC_RADIUS_TOL_MM:
         raise InputError(f"{source}: line {number}: arc of zero radius")
     if abs(r_start - r_end) > max(ARC_RADIUS_TOL_MM, ARC_RADIUS_TOL_REL * r_start):
@@ -531,10 +534,17 @@ def _arc_centre(words: dict, state: _State, start: np.ndarray, end: np.ndarray, 
     return centre, normal
 
 
-def _centre_from_radius(r: float, kind: str, start, end, normal, source: str, number: int) -> np.ndarray:
+def _radius(point: list, centre: list, normal_axis: int) -> float:
+    """Distance from ``centre`` to ``point`` in the arc plane (square to axis ``normal_axis``)."""
+    i, j = (k for k in range(3) if k != normal_axis)
+    return math.sqrt((point[i] - centre[i]) ** 2 + (point[j] - centre[j]) ** 2)
+
+
+def _centre_from_radius(r: float, kind: str, start: list, end: list, normal_axis: int, source: str,
+                        number: int) -> list:
     """R > 0: the short way (<= 180 degrees), R < 0: the long way."""
-    chord = (end - start) - np.dot(end - start, normal) * normal
-    half = np.linalg.norm(chord) / 2
+    chord = [0.0 if k == normal_axis else e - s for k, (s, e) in enumerate(zip(start, end))]
+    half = math.sqrt(sum(c * c for c in chord)) / 2
     if half < arcs.FULL_CIRCLE_MM:
         raise InputError(f"{source}: line {number}: an R arc cannot be a full circle; use I/J/K")
     if half > abs(r) + ARC_RADIUS_TOL_MM:
@@ -542,7 +552,10 @@ def _centre_from_radius(r: float, kind: str, start, end, normal, source: str, nu
                          f"chord {half:.4f} mm")
     height = math.sqrt(max(r * r - half * half, 0.0))
     side = (1 if kind == ARC_CCW else -1) * (1 if r > 0 else -1)
-    return start + chord / 2 + side * height * np.cross(normal, chord / (2 * half))
+    i, j = (normal_axis + 1) % 3, (normal_axis + 2) % 3  # normal x chord turns the chord a quarter in the plane
+    across = [0.0, 0.0, 0.0]
+    across[i], across[j] = -chord[j] / (2 * half), chord[i] / (2 * half)
+    return [s + c / 2 + side * height * a for s, c, a in zip(start, chord, across)]
 
 
 def _append(state: _State, kind: str, position, feed: float, number: int) -> None:

@@ -53,7 +53,7 @@ class ToolTilted(ExportRefused):
 
 def number(value: float, decimals: int) -> str:
     """Fixed-point text of a finite number; every single number an exporter writes goes through here
-    or through ``numbers`` (the same rule for a column)."""
+    or through ``numbers`` (the same rule for a column) or ``writable`` (the same, for a whole line)."""
     if not math.isfinite(value):
         raise ExportRefused(f"refusing to write a non-finite number ({value})")
     text = f"{value:.{decimals}f}"
@@ -62,12 +62,17 @@ def number(value: float, decimals: int) -> str:
 
 def numbers(values, decimals: int) -> list[str]:
     """``number`` for a whole array (read in C order): values that round to zero are written unsigned."""
-    values = np.asarray(values, dtype=float).reshape(-1)
+    form = f"%.{decimals}f"
+    return [form % v for v in writable(values, decimals).reshape(-1).tolist()]
+
+
+def writable(values, decimals: int) -> np.ndarray:
+    """The values ``numbers`` writes, as floats (refused when one is not finite, those that round to
+    zero made 0.0): for an exporter that writes whole lines at once with the same ``%.{decimals}f``."""
+    values = np.asarray(values, dtype=float)
     if not np.all(np.isfinite(values)):
         raise ExportRefused("refusing to write a non-finite number")
-    values = np.where(np.abs(values) < 0.5 * 10.0 ** -decimals, 0.0, values)
-    form = f"%.{decimals}f"
-    return [form % v for v in values.tolist()]
+    return np.where(np.abs(values) < 0.5 * 10.0 ** -decimals, 0.0, values)
 
 
 @dataclass

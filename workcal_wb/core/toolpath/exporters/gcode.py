@@ -19,7 +19,7 @@ from .. import orientation
 from ..gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANES, PLANE_OF_AXIS
 from ..model import (ARC_CCW, ARC_CW, COOLANT, DWELL, FIRST_ARC_CODE, KINDS, LENGTH_OFFSET, SPINDLE, STOP,
                      TOOL_CHANGE)
-from ..safety import check_vertical, numbers
+from ..safety import check_vertical, numbers, writable
 from ..transform import transformed
 from . import common
 
@@ -148,30 +148,36 @@ def _chunks(path, header: list[str], machine: str, rotary_name: str, offsets: di
     plane = 17
     for a in range(0, len(path), CHUNK_MOVES):
         b = min(a + CHUNK_MOVES, len(path))
-        xyz = np.array(numbers(path.end[a:b], 4), dtype=object).reshape(-1, 3)
         rot = None if angles is None else np.array(numbers(angles[a:b], 4), dtype=object).reshape(-1, 2)
         tail = ([f" {rotary[0]}{u} {rotary[1]}{v}" for u, v in rot] if rot is not None else [""] * (b - a))
-        lines = [f"{c} X{x} Y{y} Z{z}{t}{f}" for c, (x, y, z), t, f in
-                 zip(codes[a:b], xyz, tail, feed_words[a:b])]
-        for i in np.flatnonzero(special[a:b]) + a:
+        # A whole line formatted at once (numbers' rule, by writable): half the time of a word at a time.
+        lines = [f"{c} X{x:.4f} Y{y:.4f} Z{z:.4f}{t}{f}" for c, (x, y, z), t, f in
+                 zip(codes[a:b].tolist(), writable(path.end[a:b], 4).tolist(), tail, feed_words[a:b].tolist())]
+        # The others' numbers, and their arcs' planes, for the whole chunk at once.
+        here = np.flatnonzero(special[a:b]) + a
+        row_words = np.array(numbers(path.end[here], 4), dtype=object).reshape(-1, 3)
+        arcs_here = here[path.arc_mask[here]]
+        normals = path.arc_normal[arc_rows[arcs_here]]
+        normal_axes = np.abs(normals).argmax(axis=1)
+        arc_words = iter(zip(np.array(numbers(path.arc_centre[arc_rows[arcs_here]] - starts[arcs_here], 4),
+                                      dtype=object).reshape(-1, 3),
+                             normal_axes.tolist(), (normals[np.arange(len(normals)), normal_axes] < 0).tolist()))
+        for i, row in zip(here.tolist(), row_words):
             block = []
             for e in events.get(i, ()):
                 block += _event_blocks(e, machine)
-            k, row = int(path.kind[i]), xyz[i - a]
+            k = int(path.kind[i])
             known = path.partial.get(i, AXES) if not five_axis else AXES
             words = [f"{axis}{row[j]}" for j, axis in enumerate(AXES) if axis in known]
             code = MOTION_CODE[KINDS[k]]
             g43, h = offsets.get(i, ("", ""))
             if k >= FIRST_ARC_CODE:
-                r = arc_rows[i]
-                normal, centre = path.arc_normal[r], path.arc_centre[r]
-                axis = int(np.argmax(np.abs(normal)))
-                if normal[axis] < 0:
+                offset, axis, reversed_normal = next(arc_words)
+                if reversed_normal:
                     code = MOTION_CODE[ARC_CW if KINDS[k] == ARC_CCW else ARC_CCW]
                 if PLANE_OF_AXIS[axis] != plane:
                     plane = PLANE_OF_AXIS[axis]
                     block.append(f"G{plane}")
-                offset = numbers(centre - starts[i], 4)
                 words += [f"{letter}{offset[OFFSET_AXIS[letter]]}" for letter in PLANES[plane][1]]
             notes = [comment(c) for c in path.comments.get(i, "").split("\n") if c]  # on the line: they stay its own
             block.append(" ".join(w for w in [code, g43, *words, h] if w) + tail[i - a] + feed_words[i]
