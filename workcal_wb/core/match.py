@@ -87,6 +87,9 @@ CANDIDATE_FLOOR = 0.7
 # right pose's hypothesis 4th to 11th among some 20 wrong turns, never refined; after the quick steps it
 # came first in each of 8 seeds.
 PRE_REFINED, QUICK_ITERATIONS = 12, 10
+# Two hypotheses are one pose unless they differ by more than this turn (deg) or this share of the model
+# diagonal at the scan's centre; refined poses, by the finer pair.
+HYPOTHESES_APART, REFINED_APART = (15.0, 0.1), (5.0, 0.05)
 # A search whose best pose does not fit the scan within the verdict's limit is run once more with
 # this many times the RANSAC hypotheses.
 RETRY_SAMPLES = 5
@@ -395,16 +398,18 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
     probe = _subset(coarse, VERIFY_POINTS, rng)
     centre = probe.mean(axis=0)
     # Many hypotheses are near copies of the best one; a symmetric twin must not be crowded out.
-    poses = poses[global_search.distinct(poses, votes, centre, 15.0, 0.1 * surface.diagonal, RANSAC_VERIFIED)]
+    angle, share = HYPOTHESES_APART
+    poses = poses[global_search.distinct(poses, votes, centre, angle, share * surface.diagonal, RANSAC_VERIFIED)]
     verified = inlier_scores(probe, surface, poses, 1.5 * voxel)
-    keep = [i for i in global_search.distinct(poses, verified, centre, 15.0, 0.1 * surface.diagonal)
+    keep = [i for i in global_search.distinct(poses, verified, centre, angle, share * surface.diagonal)
             if verified[i] >= CANDIDATE_FLOOR * verified.max()][:PRE_REFINED]
     stepped = [refine(probe, surface, poses[i], 3 * voxel, voxel, QUICK_ITERATIONS, 1e-3).T for i in keep]
     rescored = inlier_scores(probe, surface, stepped, voxel)
-    keep = global_search.distinct(stepped, rescored, centre, 15.0, 0.1 * surface.diagonal, options.candidates)
+    keep = global_search.distinct(stepped, rescored, centre, angle, share * surface.diagonal, options.candidates)
     refined = [coarse_to_fine([probe], surface, stepped[i], 3 * voxel, voxel / 2).T for i in keep]
     scores = inlier_scores(probe, surface, refined, voxel)
-    order = global_search.distinct(refined, scores, centre, 5.0, 0.05 * surface.diagonal)
+    angle, share = REFINED_APART
+    order = global_search.distinct(refined, scores, centre, angle, share * surface.diagonal)
     return [(refined[i], float(scores[i])) for i in order if scores[i] > 0]
 
 
@@ -424,7 +429,8 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
     else:
         states = [coarse_to_fine([medium], surface, T, gate, surface.spacing) for T in contenders]
         scores = inlier_scores(medium, surface, [s.T for s in states], min(s.gate for s in states))
-        order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), 5.0, 0.05 * surface.diagonal)
+        angle, share = REFINED_APART
+        order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), angle, share * surface.diagonal)
         contenders, states = [contenders[i] for i in order], [states[i] for i in order]
     if method == "robust":
         best = _polish(states[0], fine, surface, tolerance, hopeless)
