@@ -534,9 +534,14 @@ def _arc_centre(words: dict, state: _State, start: list, end: list, source: str,
     return centre, normal
 
 
+def _in_plane(normal_axis: int) -> tuple[int, int]:
+    """The two axes of the arc plane square to ``normal_axis``, in turn after it (normal x first = second)."""
+    return (normal_axis + 1) % 3, (normal_axis + 2) % 3
+
+
 def _radius(point: list, centre: list, normal_axis: int) -> float:
     """Distance from ``centre`` to ``point`` in the arc plane (square to axis ``normal_axis``)."""
-    i, j = (k for k in range(3) if k != normal_axis)
+    i, j = _in_plane(normal_axis)
     return math.sqrt((point[i] - centre[i]) ** 2 + (point[j] - centre[j]) ** 2)
 
 
@@ -552,7 +557,7 @@ def _centre_from_radius(r: float, kind: str, start: list, end: list, normal_axis
                          f"chord {half:.4f} mm")
     height = math.sqrt(max(r * r - half * half, 0.0))
     side = (1 if kind == ARC_CCW else -1) * (1 if r > 0 else -1)
-    i, j = (normal_axis + 1) % 3, (normal_axis + 2) % 3  # normal x chord turns the chord a quarter in the plane
+    i, j = _in_plane(normal_axis)  # normal x chord turns the chord a quarter in the plane
     across = [0.0, 0.0, 0.0]
     across[i], across[j] = -chord[j] / (2 * half), chord[i] / (2 * half)
     return [s + c / 2 + side * height * a for s, c, a in zip(start, chord, across)]
