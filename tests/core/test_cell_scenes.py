@@ -343,7 +343,8 @@ def test_an_undistorted_noisy_low_view_is_not_refused_for_distortion():
     scale and a 0.32 % strain that no scanner made and "moved" W 0.70 mm, so the calibration failed
     with W right to 0.003 deg.  The check measured each point against its nearest sample's tangent
     plane, another face's near the block's edges, where noise along grazing rays puts points past the
-    edge on one side; on meshes it measures against the exact closest face."""
+    edge on one side, with the noisy point as its lever; on meshes it measures against the exact closest
+    face away from its edges, and the lever is the point's foot (distortion.py)."""
     cell = cell_scan(CellSpec(frame="sensor", azimuth_deg=69.66992932758518, elevation_deg=25.473620413605275,
                               stray_fraction=0.02, noise_mm=0.2, seed=3015))
     result = _calibrated(cell)

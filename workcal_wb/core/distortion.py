@@ -15,9 +15,8 @@ moved (short of it at 0.5-1 % scale: 70-83 %, what the matches take up being lin
 undistorted scans with veils, multipath, range noise and missing patches it stays under 0.05 mm at 0.1 mm
 of noise.  Noise must not read as strain: near a block's edges it reads one-sided whichever plane a point
 is measured against, so on meshes those points are left out (EDGE_DEG); and each point's lever is its foot
-on the model, not the point, whose noise moves lever and residual together (see _linearised).  Seen low
-(25 deg) through 0.2-0.35 mm of noise, undistorted scenes at their true poses read no strain in 18 of 18
-(4 did before, shifts 0.06-0.2 mm), and fresh noise read one in 0-1 % of draws (4-14 % before).
+on its face, not the point, whose noise moves lever and residual together (_linearised).  Seen low (25 deg)
+through 0.2-0.35 mm of noise, undistorted scenes at their true poses read no strain in 18 of 18 (4 did).
 
 Whose strain is it?  The reference is the cell's standard (rigid, its model exact): along the strains
 it shows, its points tell the scanner's.  Along the others (two faces of a block seen do not show its
@@ -27,8 +26,8 @@ from several: 0.3-0.5 %), and that does not move W.  So the workpiece's strain c
 it reads along the reference's strains what the reference does not (OWN_STRAIN): then it is its own.
 Counted as the scanner's, the bunny's refused 4 of 5 scenes whose W was right.
 
-The scale is always fitted.  A strain that keeps the volume counts only along the directions the
-points show it in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
+The scale and the strains that keep the volume count only along the directions the points show them
+in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
 shears nearly rigid on both, and along those the fit would read a percent of strain out of the models'
 and the sensor's micrometres (it did on a 15 mm figurine: 1-4 %, W "moved" 1-2 mm, truly 0.02 mm).  A
 strain no point shows is not found: the check is blind to it, as every fit is.  Nor is a strain
@@ -60,6 +59,8 @@ STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
 # moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.  Measured: the
 # car scenes' directions 3-25 mm (most over 5), the figurine scene's weakest four 0.5-3 mm.
 SHOWN_MM = 5.0
+# A scale's information below this share of a shown direction's is rounding: none to free (_strain).
+SCALE_ROUNDING = 1e-9
 # Tukey's biweight: a point weighs nothing beyond this many robust scales (refine.MAD_TO_SIGMA x the median
 # absolute residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
 # side: weighed fully they read as the scan growing (0.05-0.1 % on scans with veils and noise 0.2 mm).
@@ -84,13 +85,15 @@ OWN_LIMIT = 0.015
 # scale as 1.39 %) and the workpiece, reading more than the reference, was taken for its own.
 ITERATIONS = 4
 SETTLED = 1e-5
-# On a mesh, a point counts only where the faces nearest a gate inside and outside its foot turn less than
-# this from its own: near a block's edge a point pushed inside by noise is nearer the side face, so its
-# noise reads short on one side only.  Measured: an L-block seen low at 0.2 mm of noise read a -0.16 %
-# scale from the nearest samples' tangent planes (another face's near an edge), +0.18 % at 0.35 mm from the
-# exact closest faces; with its edges left out, none (W right in both scenes).
+# On a mesh, a point counts only where the faces nearest a gate inside and outside its foot (along its
+# face's normal) turn less than this from its face, or from its face's back (a wall thinner than two gates,
+# not an edge): near a block's edge a point pushed inside by noise is nearer the side face, so its noise
+# reads short on one side only.  Measured on two L-block views at 25 deg, 40 draws of 0.35 mm of range noise
+# each, the significance test off: a mean scale of -0.009 and -0.015 % against the nearest samples' tangent
+# planes (another face's near an edge), +0.009 and +0.005 % against the exact closest faces, +0.000 and
+# -0.004 % (+/-0.003) with the edges left out.
 EDGE_DEG = 30.0
-# A region with fewer points near its model than this shows no strain (the matches' gates fail it anyway).
+# A region with fewer points near its model than this shows no strain.
 MIN_POINTS = 50
 
 
@@ -213,8 +216,10 @@ def _strain(blocks, weights) -> tuple[np.ndarray, float, np.ndarray]:
     if not total > 0:  # every point weighs nothing: nothing to measure
         return np.zeros(6), 0.0, np.zeros((6, 0))
     scale, volume = information[0, 0], information[1:, 1:]
-    if scale > 0:  # the volume-keeping strains with the scale free; none to free when the regions' motions
-        volume = volume - np.outer(information[1:, 0], information[0, 1:]) / scale  # take it up (one face seen)
+    # The volume-keeping strains with the scale free; none to free when the regions' motions take it up
+    # whole (one face seen: its information is zero but for rounding, and so are its cross terms).
+    if scale > SCALE_ROUNDING * SHOWN_MM ** 2 * total:
+        volume = volume - np.outer(information[1:, 0], information[0, 1:]) / scale
     values, vectors = np.linalg.eigh(volume)
     shown = np.sqrt(np.maximum(values, 0.0) / total) >= SHOWN_MM
     directions = np.zeros((6, 1 + shown.sum()))
@@ -254,17 +259,18 @@ def _biweights(residuals: np.ndarray) -> np.ndarray:
 def _linearised(points: np.ndarray, surface: SurfaceModel, pose: np.ndarray, gate: float, centre: np.ndarray):
     """Point-to-plane residuals of the points within ``gate`` of their model at ``pose``, and their
     derivatives (in the scan's frame, about ``centre``) by the strains of STRAIN_BASIS and by a small
-    rigid motion.  On a mesh, each point against its exact closest face, and only where no other face
-    lies within the gate (EDGE_DEG): near an edge the noise is read short on one side (a point pushed
-    into a block near its edge is nearer the side face) or on a face not its own.  A point model has
-    only its samples' tangent planes; the nearest sample may lie up to a spacing beside a point's foot."""
+    rigid motion.  On a mesh, each point against its exact closest face, away from the face's edges
+    (EDGE_DEG): near an edge the noise is read short on one side (a point pushed into a block near its
+    edge is nearer the side face) or on a face not its own.  A point model has only its samples' tangent
+    planes; the nearest sample may lie up to a spacing beside a point's foot."""
     in_model = frames.apply(frames.invert(pose), points)
     if surface.is_mesh:
         feet, normals = surface.closest_points(in_model)
         near = np.flatnonzero(np.linalg.norm(in_model - feet, axis=1) <= gate)  # not NaN (a point not finite)
-        for side in (-gate, gate):  # the faces nearest a gate inside and outside the foot: its own face's
+        alike = np.cos(np.radians(EDGE_DEG))
+        for side in (-gate, gate):  # the faces nearest a gate inside and outside the foot: its face or its back
             _, beside = surface.closest_points(feet[near] + side * normals[near])
-            near = near[np.einsum("ij,ij->i", beside, normals[near]) >= np.cos(np.radians(EDGE_DEG))]
+            near = near[np.abs(np.einsum("ij,ij->i", beside, normals[near])) >= alike]
         normals = normals[near]
         residuals = np.einsum("ij,ij->i", in_model[near] - feet[near], normals)
     else:
@@ -274,8 +280,8 @@ def _linearised(points: np.ndarray, surface: SurfaceModel, pose: np.ndarray, gat
         kept = np.abs(residuals) <= gate
         near, residuals = near[kept], residuals[kept]
         normals = surface.normals[index[near]]
-    # The lever is the point's foot on the model, not the point: a point's noise moves its residual and its
-    # lever together, and their product reads as a strain beyond what the noise explains (at 0.35 mm, 2-4
+    # The lever is the point's foot on its face's (or sample's tangent) plane, not the point: a point's noise
+    # moves its residual and its lever together, and their product reads as a strain beyond what the noise explains (at 0.35 mm, 2-4
     # times the chi-square's mean: 4-14 % of draws of noise on undistorted low views read a strain).
     x = frames.apply(pose, in_model[near] - residuals[:, None] * normals) - centre
     normals = normals @ pose[:3, :3].T
