@@ -281,8 +281,9 @@ def _linearised(points: np.ndarray, surface: SurfaceModel, pose: np.ndarray, gat
         near, residuals = near[kept], residuals[kept]
         normals = surface.normals[index[near]]
     # The lever is the point's foot on its face's (or sample's tangent) plane, not the point: a point's noise
-    # moves its residual and its lever together, and their product reads as a strain beyond what the noise explains (at 0.35 mm, 2-4
-    # times the chi-square's mean: 4-14 % of draws of noise on undistorted low views read a strain).
+    # moves its residual and its lever together, and their product reads as a strain beyond what the noise
+    # explains (at 0.35 mm, 2-4 times the chi-square's mean: 4-14 % of draws of noise on undistorted low
+    # views read a strain).
     x = frames.apply(pose, in_model[near] - residuals[:, None] * normals) - centre
     normals = normals @ pose[:3, :3].T
     components = np.column_stack([normals[:, r] * x[:, c] + (normals[:, c] * x[:, r] if r != c else 0)
