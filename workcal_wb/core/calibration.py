@@ -78,15 +78,19 @@ SURFACE_SAMPLES = 2000
 # The match that located a region is its final one when the region holds at most this share of
 # points more than it was made on (see _refit).
 KEPT_MATCH_EXTRA = 0.02
-# Points per region the distortion check measures on, at most.  A strain reads to about the noise over
-# (lever x sqrt(points)): 0.1 mm over 50 mm and 5000 points is 0.003 %, far below the 0.05 % that moves W
-# 0.15 mm over the 300 mm between the objects; and the check's exact-face queries cost in proportion (the
-# demo's: 0.17 s on 20000 points a region, 0.05 s on 5000).  Measured over 8 draws of 5000 on distorted
-# cell scans: readings within 0.002-0.005 % and shifts within 0.006-0.016 mm of the reading on every
-# point; on clean scans at 0.2-0.35 mm of noise, 1 of 400 fresh draws of noise and 0 of 160 calibrations
-# read a strain (3 of 400 and 0 of 40 on every point: a bias too small to matter is less significant on
-# fewer points).
+# Points per region the distortion check measures on: DISTORTION_POINTS where its match's residual RMS
+# is DISTORTION_RMS_MM or less, more as the square of a larger RMS, at most as many as a match is
+# finished on.  The smallest strain its significance test tells from noise goes as RMS / (lever x
+# sqrt(points)): at 0.1 mm on 5000 points, over a region's 30-50 mm, 0.01-0.02 % (four standard
+# deviations), which moves W 0.03-0.06 mm over the 300 mm between the objects; from 0.2 mm of RMS on,
+# the check has every point it had on 20000.  Its exact-face queries cost in proportion: the demo's
+# check took 0.17 s on 20000 points a region, 0.06 s now.  Measured: 8 draws on distorted cell scans at
+# 0.1 mm of noise read within 0.002-0.005 % and 0.006-0.016 mm of every point's reading; 0 of 160 draws
+# on 40 clean ones at 0.1-0.15 mm read a strain; the 172 random cell scenes of stops 35-36 all keep
+# their status.  (A flat 5000 at any RMS read a strain in 2 of 8 draws on a clean scene at 0.35 mm,
+# where every point reads none.)
 DISTORTION_POINTS = 5000
+DISTORTION_RMS_MM = 0.1
 
 
 def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None,
@@ -343,13 +347,16 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
 
 
 def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> dict:
-    """The scan's strain against the models and the shift of W it causes (distortion.distortion), on at
-    most DISTORTION_POINTS points per region."""
+    """The scan's strain against the models and the shift of W it causes (distortion.distortion), on as
+    many points of each region as tell a strain that matters from its fit's noise (DISTORTION_POINTS)."""
     rng = np.random.default_rng(options.seed)
-    points = [scan.points[idx if len(idx) <= DISTORTION_POINTS else rng.choice(idx, DISTORTION_POINTS, replace=False)]
-              for idx in (regions["workpiece"], regions["reference"])]
+    points = []
+    for idx, m in zip((regions["workpiece"], regions["reference"]), matches):
+        noisier = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
+        n = int(min(len(idx), MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noisier, 1.0))))
+        points.append(scan.points[idx if n == len(idx) else rng.choice(idx, n, replace=False)])
     targets = surfaces[0].points if toolpath_points is None else toolpath_points
-    # The points each match was finished on (within its gate), at least twice the tolerance or three RMS
+    # The gates: each match's own (the points it was finished on), at least twice the tolerance or three RMS
     # (where the tolerance is below the noise: the gates fail it then).  Not narrower: a 2 % scale put the
     # ends of the reference 1.2 mm off it, beyond 0.6 mm, and the points left near its middle showed no strain.
     gates = [float(np.nanmax([2 * options.tolerance_mm, 3 * m.rms_mm, m.gate_mm])) for m in matches]

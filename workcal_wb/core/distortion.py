@@ -6,7 +6,7 @@ only sees the noise.  But W joins two matches that sit apart, and each took up t
 its own region: W moves by about the distortion times their distance (0.5 % of 300 mm is 1.5 mm), an
 "ok" with a wrong pose.  So the distortion is measured: one symmetric strain for the whole scan (its
 turning part is a rigid motion, harmless), fitted with one small rigid motion per region by
-point-to-plane least squares (Tukey-weighted), on the points each match was finished on, linearised
+point-to-plane least squares (Tukey-weighted), on the points within each match's gate, linearised
 at the final poses and again where each step leaves the points (ITERATIONS).  What each region's rigid
 motion takes up of that strain, differenced between the two regions at the toolpath, is how far W
 moves.  On cell scans scaled 0.05-2 %, stretched in depth or sheared 0.3-1 % (tests/core/
