@@ -297,8 +297,9 @@ def test_a_scan_distorted_by_its_scanner_fails_and_says_so(seed, strain):
 def test_a_scan_scaled_two_percent_is_refused_for_its_scale(seed, scale):
     """A 2 % scale put the reference's ends beyond the check's gate (twice the tolerance, 0.6 mm), its
     middle read no strain, and the workpiece's 2 % went as the part's own: the check read nothing, with W
-    3.8-4.6 mm off (refused here for other reasons, by a hair).  The check keeps the points within each
-    match's own gate, and no part differs from its model by a scale of 2 %."""
+    3.8-4.6 mm off (refused here for other reasons, by a hair).  The check's gates are at least the
+    matches' own (it keeps every point a match was finished on), and no part differs from its model by a
+    scale of 2 %."""
     cell = cell_scan(CellSpec(frame="sensor", seed=seed))
     result = _calibrated(_distorted(cell, np.eye(3) * scale, seed))
     _, displacement = _errors(result.W, cell.W, cell.workpiece_model)

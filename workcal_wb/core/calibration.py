@@ -83,12 +83,12 @@ KEPT_MATCH_EXTRA = 0.02
 # finished on.  The smallest strain its significance test tells from noise goes as RMS / (lever x
 # sqrt(points)): at 0.1 mm on 5000 points, over a region's 30-50 mm, 0.01-0.02 % (four standard
 # deviations), which moves W 0.03-0.06 mm over the 300 mm between the objects; from 0.2 mm of RMS on,
-# the check has every point it had on 20000.  Its exact-face queries cost in proportion: the demo's
-# check took 0.17 s on 20000 points a region, 0.06 s now.  Measured: 8 draws on distorted cell scans at
-# 0.1 mm of noise read within 0.002-0.005 % and 0.006-0.016 mm of every point's reading; 0 of 160 draws
-# on 40 clean ones at 0.1-0.15 mm read a strain; the 172 random cell scenes of stops 35-36 all keep
-# their status.  (A flat 5000 at any RMS read a strain in 2 of 8 draws on a clean scene at 0.35 mm,
-# where every point reads none.)
+# the check has every point it had before (up to 20000).  Its exact-face queries cost in proportion: the
+# demo's check took 0.17 s on 20000 points a region, 0.06 s by this rule.  Measured: 8 draws on distorted
+# cell scans at 0.1 mm of noise read within 0.002-0.005 % and 0.006-0.016 mm of every point's reading;
+# 0 of 160 draws on 40 clean ones at 0.1-0.15 mm read a strain; the 172 random cell scenes of stops
+# 35-36 all keep their status.  (A flat 5000 at any RMS read a strain in 2 of 8 draws on a clean scene at
+# 0.35 mm, where every point reads none.)
 DISTORTION_POINTS = 5000
 DISTORTION_RMS_MM = 0.1
 
@@ -352,13 +352,14 @@ def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> d
     rng = np.random.default_rng(options.seed)
     points = []
     for idx, m in zip((regions["workpiece"], regions["reference"]), matches):
-        noisier = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
-        n = int(min(len(idx), MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noisier, 1.0))))
+        noise_factor = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
+        n = int(min(len(idx), MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noise_factor, 1.0))))
         points.append(scan.points[idx if n == len(idx) else rng.choice(idx, n, replace=False)])
     targets = surfaces[0].points if toolpath_points is None else toolpath_points
-    # The gates: each match's own (the points it was finished on), at least twice the tolerance or three RMS
-    # (where the tolerance is below the noise: the gates fail it then).  Not narrower: a 2 % scale put the
-    # ends of the reference 1.2 mm off it, beyond 0.6 mm, and the points left near its middle showed no strain.
+    # Each gate the widest of its match's own (every point the match was finished on stays), twice the
+    # tolerance and three RMS (where the tolerance is below the noise: the gates fail it then).  Not
+    # narrower: a 2 % scale put the ends of the reference 1.2 mm off it, beyond 0.6 mm, and the points left
+    # near its middle showed no strain.
     gates = [float(np.nanmax([2 * options.tolerance_mm, 3 * m.rms_mm, m.gate_mm])) for m in matches]
     return distortion(points, surfaces, [m.matrix for m in matches], targets, gates)
 

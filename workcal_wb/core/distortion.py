@@ -1,22 +1,23 @@
 """How far a scan's own distortion moves W: a scanner whose scale or axes are off.
 
-A scan that its scanner made 0.5 % too large still fits each model closely: each rigid match takes
-up what it can of the distortion, the residuals stay small and so does the bootstrap spread, which
-only sees the noise.  But W joins two matches that sit apart, and each took up the distortion about
-its own region: W moves by about the distortion times their distance (0.5 % of 300 mm is 1.5 mm), an
-"ok" with a wrong pose.  So the distortion is measured: one symmetric strain for the whole scan (its
-turning part is a rigid motion, harmless), fitted with one small rigid motion per region by
-point-to-plane least squares (Tukey-weighted), on the points within each match's gate, linearised
-at the final poses and again where each step leaves the points (ITERATIONS).  What each region's rigid
-motion takes up of that strain, differenced between the two regions at the toolpath, is how far W
-moves.  On cell scans scaled 0.05-2 %, stretched in depth or sheared 0.3-1 % (tests/core/
-test_cell_scenes.py) the strain reads to 2-5 % of itself and the shift is 70-132 % of how far W truly
-moved (short of it at 0.5-1 % scale: 70-83 %, what the matches take up being linearised too); on
-undistorted scans with veils, multipath, range noise and missing patches it stays under 0.05 mm at 0.1 mm
-of noise.  Noise must not read as strain: near a block's edges it reads one-sided whichever plane a point
-is measured against, so on meshes those points are left out (EDGE_DEG); and each point's lever is its foot
-on its face, not the point, whose noise moves lever and residual together (_linearised).  Seen low (25 deg)
-through 0.2-0.35 mm of noise, undistorted scenes at their true poses read no strain in 18 of 18 (4 did).
+A scan that its scanner made 0.5 % too large still fits each model closely: each rigid match takes up
+what it can of the distortion, the residuals stay small and so does the bootstrap spread, which only
+sees the noise.  But W joins two matches that sit apart, and each took up the distortion about its own
+region: W moves by about the distortion times their distance (0.5 % of 300 mm is 1.5 mm), an "ok" with a
+wrong pose.  So the distortion is measured: one symmetric strain for the whole scan (its turning part is
+a rigid motion, harmless), fitted with one small rigid motion per region by point-to-plane least squares
+(Tukey-weighted), on the points near their models (every point a match was finished on among them),
+linearised at the final poses and again where each step leaves the points (ITERATIONS).  What each
+region's rigid motion takes up of that strain, differenced between the two regions at the toolpath, is
+how far W moves.  On cell scans scaled 0.05-2 %, stretched in depth or sheared 0.3-1 %
+(tests/core/test_cell_scenes.py) the strain reads to 2-5 % of itself and the shift is 70-132 % of how
+far W truly moved (short of it at 0.5-1 % scale: 70-83 %, what the matches take up being linearised
+too); on undistorted scans with veils, multipath, range noise and missing patches it stays under 0.05 mm
+at 0.1 mm of noise.  Noise must not read as strain: near a block's edges it reads one-sided whichever
+plane a point is measured against, so on meshes those points are left out (EDGE_DEG); and each point's
+lever is its foot on its face, not the point, whose noise moves lever and residual together
+(_linearised).  Seen low (25 deg) through 0.2-0.35 mm of noise, undistorted scenes at their true poses
+read no strain in 18 of 18 (4 did).
 
 Whose strain is it?  The reference is the cell's standard (rigid, its model exact): along the strains
 it shows, its points tell the scanner's.  Along the others (two faces of a block seen do not show its
