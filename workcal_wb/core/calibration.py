@@ -353,8 +353,8 @@ def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> d
     points = []
     for idx, m in zip((regions["workpiece"], regions["reference"]), matches):
         noise_factor = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
-        n = int(min(len(idx), MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noise_factor, 1.0))))
-        points.append(scan.points[idx if n == len(idx) else rng.choice(idx, n, replace=False)])
+        n = int(min(MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noise_factor, 1.0))))
+        points.append(pointops.random_subset(scan.points[idx], n, rng))
     targets = surfaces[0].points if toolpath_points is None else toolpath_points
     # Each gate the widest of its match's own (every point the match was finished on stays), twice the
     # tolerance and three RMS (where the tolerance is below the noise: the gates fail it then).  Not
@@ -373,7 +373,7 @@ def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, ga
     if options.method != "robust":
         return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
     rng = np.random.default_rng(options.seed)
-    medium = points if len(points) <= MEDIUM_POINTS else points[rng.choice(len(points), MEDIUM_POINTS, replace=False)]
+    medium = pointops.random_subset(points, MEDIUM_POINTS, rng)
     state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
     return frames.invert(refine_given(state, medium, points, surface, options.tolerance_mm).T)
 

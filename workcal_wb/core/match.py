@@ -240,8 +240,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                            reasons=[f"{scan.name}: the scan points are {kind}; they cannot fix a pose"])
-    fine = _subset(scan.points, options.max_fine_points, rng)
-    medium = _subset(fine, MEDIUM_POINTS, rng)
+    fine = pointops.random_subset(scan.points, options.max_fine_points, rng)
+    medium = pointops.random_subset(fine, MEDIUM_POINTS, rng)
     probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
     noise, patch = (float(np.median(probe_noise)), float(np.median(probe_radius))) if len(probes) else (np.inf, 0.0)
     if not noise <= MAX_SCATTER * patch:
@@ -368,10 +368,6 @@ class PhaseTimer:
         return time.perf_counter() - self.started
 
 
-def _subset(points: np.ndarray, limit: int, rng: np.random.Generator) -> np.ndarray:
-    return points if len(points) <= limit else points[rng.choice(len(points), limit, replace=False)]
-
-
 def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, options: MatchOptions,
                        rng: np.random.Generator, min_voxel: float = 0.0) -> list[tuple[np.ndarray, float]]:
     """Distinct scan -> model poses from feature RANSAC, each refined on the coarse grid, with
@@ -395,7 +391,7 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
                                               keep=RANSAC_KEPT, min_edge=3 * voxel)
     if len(poses) == 0:
         return []
-    probe = _subset(coarse, VERIFY_POINTS, rng)
+    probe = pointops.random_subset(coarse, VERIFY_POINTS, rng)
     centre = probe.mean(axis=0)
     # Many hypotheses are near copies of the best one; a symmetric twin must not be crowded out.
     angle, share = HYPOTHESES_APART

@@ -97,6 +97,11 @@ def lengths(vectors: np.ndarray) -> np.ndarray:
     return np.sqrt(x * x + y * y + z * z)
 
 
+def random_subset(points: np.ndarray, limit: int, rng: np.random.Generator) -> np.ndarray:
+    """At most ``limit`` of the points, drawn without replacement (all of them, as they are, when no more)."""
+    return points if len(points) <= limit else points[rng.choice(len(points), limit, replace=False)]
+
+
 def median_spacing(points: np.ndarray, sample: int = 20000, seed: int = 0) -> float:
     """Median distance from a point to its nearest neighbour (the scan's resolution).
 
