@@ -354,7 +354,7 @@ def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> d
     for idx, m in zip((regions["workpiece"], regions["reference"]), matches):
         noise_factor = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
         n = int(min(MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noise_factor, 1.0))))
-        points.append(pointops.random_subset(scan.points[idx], n, rng))
+        points.append(scan.points[pointops.random_subset(idx, n, rng)])
     targets = surfaces[0].points if toolpath_points is None else toolpath_points
     # Each gate the widest of its match's own (every point the match was finished on stays), twice the
     # tolerance and three RMS (where the tolerance is below the noise: the gates fail it then).  Not

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import pointops
 from .frames import from_rotvec
 from .global_search import kabsch_batch
 from .refine import MAD_TO_SIGMA, RefineState, is_small
@@ -44,8 +45,7 @@ def refine_paper(method: str, points: np.ndarray, surface: SurfaceModel, T: np.n
         raise ValueError(f"paper method must be one of {PAPER_METHODS}, not {method!r}")
     gate = gate if gate is not None else surface.diagonal / 40
     if method == "hausdorff":
-        points = points if len(points) <= HAUSDORFF_POINTS else points[
-            np.random.default_rng(0).choice(len(points), HAUSDORFF_POINTS, replace=False)]
+        points = pointops.random_subset(points, HAUSDORFF_POINTS, np.random.default_rng(0))
         grid = surface.grid(BINNING_CELLS * surface.spacing, gate)  # the binning, for every gate to come
         grid.precompute()
     state = RefineState(np.asarray(T, float).copy(), gate=gate)

@@ -98,7 +98,8 @@ def lengths(vectors: np.ndarray) -> np.ndarray:
 
 
 def random_subset(points: np.ndarray, limit: int, rng: np.random.Generator) -> np.ndarray:
-    """At most ``limit`` of the points, drawn without replacement (all of them, as they are, when no more)."""
+    """At most ``limit`` of the rows (points, or indices to draw from), drawn without replacement (all
+    of them, as they are, when no more)."""
     return points if len(points) <= limit else points[rng.choice(len(points), limit, replace=False)]
 
 
@@ -111,9 +112,7 @@ def median_spacing(points: np.ndarray, sample: int = 20000, seed: int = 0) -> fl
     n = len(points)
     if n < 2:
         return 0.0
-    subset = points
-    if n > sample:
-        subset = points[np.random.default_rng(seed).choice(n, sample, replace=False)]
+    subset = random_subset(points, sample, np.random.default_rng(seed))
     d, _ = cKDTree(subset).query(subset, k=2)
     return float(np.median(d[:, 1]) * np.sqrt(len(subset) / n))
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import pointops
 from ..errors import InputError
 from ..parallel import Runner
 from .common import (StudyResult, StudySettings, TARGET_ROTATION_DEG, TARGET_TRANSLATION_MM, accepted,
@@ -106,7 +107,7 @@ def _subsample(scan, masks, size, regions, rng) -> np.ndarray:
     if size is None:
         return np.arange(len(scan.points))
     if regions == "truth":
-        keep = [idx if len(idx) <= size else rng.choice(idx, size, replace=False) for idx in masks.values()]
+        keep = [pointops.random_subset(idx, size, rng) for idx in masks.values()]
         return np.sort(np.concatenate(keep))
     share = min(1.0, size / max(1, len(masks["workpiece"])))
     return np.sort(rng.choice(len(scan.points), max(1, int(round(share * len(scan.points)))), replace=False))
