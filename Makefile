@@ -18,7 +18,7 @@ XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
 .PHONY: setup python-packages peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
-        bench-scenes bench-processes bench-large bench-matcher clean
+        bench-scenes bench-processes bench-large bench-matcher bench-lblock clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -79,6 +79,10 @@ bench-verdicts: setup
 # Only the scenes table (cell scans calibrated with automatic regions), replacing its section of docs/benchmarks.md.
 bench-scenes: setup
 	$(PYTHON) -m workcal_wb bench --only scenes --out $(CURDIR)/docs/benchmarks.md
+
+# Only the L-block on its foot (100 scenes of a reference that nearly maps onto itself turned over), its own section.
+bench-lblock: setup
+	$(PYTHON) -m workcal_wb bench --only lblock --workers 2 --out $(CURDIR)/docs/benchmarks.md
 
 # Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:

@@ -231,3 +231,24 @@ def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
     pooled = run(None, seed=0, log=lambda message: None, runner=Runner(workers=2), cases=cases)
     assert [r.case for r in serial] == [c.name for c in cases]
     assert pooled == serial
+
+
+def test_the_l_block_on_its_foot_section_has_its_hundred_scenes_and_counts_a_wrong_ok():
+    """The section's scenes: at least a hundred over seeds and two noise levels (the figurine stands in
+    for the bunny without the shared data); its table and its one goal, no wrong W reported ok; and one
+    scene calibrated into a row."""
+    from workcal_wb.core.benchmark.scenes import SceneRow, goals, scene_row, table, upright_l_variants
+
+    specs = upright_l_variants(0, bunny=False)
+    scenes = [spec for group in specs.values() for spec in group]
+    assert len(scenes) >= 100 and len({(s.seed, s.noise_mm) for s in scenes}) == len(scenes)
+    assert {s.workpiece for s in scenes} == {"figurine"} and {s.noise_mm for s in scenes} == {0.1, 0.2}
+    rows = [SceneRow("0.1 mm noise", "0.1 mm noise #0", 1000, "ok", 180.0, 400.0, 3.0, ""),
+            SceneRow("0.1 mm noise", "0.1 mm noise #1", 1000, "ambiguous", 180.0, 400.0, 5.0, "a rival")]
+    text = table(rows, 0, upright_l=True)
+    assert text.startswith("## L-block on its foot\n") and "| **all** | 2 | 0 | 1 | 0 | 1 | 4.0 | 5.0 |" in text
+    assert goals(rows, None, "L-block on its foot") == [
+        "L-block on its foot: a wrong W reported ok in 1 scene(s): 0.1 mm noise #0"]
+    row = scene_row("0.1 mm noise", scenes[2], None, 0)
+    assert row.status in ("ok", "ambiguous", "failed") and row.points > 10000 and row.time_s > 0
+    assert row.outcome != "wrong", row

@@ -24,6 +24,7 @@ from .match import MEDIUM_POINTS, METHODS, MatchOptions, match, match_pose, refi
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
 from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
 from .surface import SurfaceModel
+from .surroundings import judged_in_surroundings
 
 
 @dataclass(frozen=True)
@@ -153,8 +154,19 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
         U_match = match_trusted(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface,
                                 match_options, "workpiece")
 
-    report(0.7, "weighing the poses by contact with the platform and free space")
     scene = _physics_scene(scan, options, *((found.plane, found.spacing) if regions is None else (None, None)))
+    report(0.65, "weighing both poses against the scan beside their regions")
+    platform_idx = np.flatnonzero(np.isfinite(scan.points).all(axis=1))[scene.platform.below] \
+        if scene.platform is not None else np.empty(0, np.int64)
+    given = dict(region_idx)
+    for role, other, surface in (("workpiece", "reference", workpiece_surface),
+                                 ("reference", "workpiece", reference_surface)):
+        matched = U_match if role == "workpiece" else V_match
+        matched, region_idx[role] = judged_in_surroundings(
+            scan, given[role], np.union1d(platform_idx, given[other]), surface, matched, match_options, role,
+            scene.spacing)
+        U_match, V_match = (matched, V_match) if role == "workpiece" else (U_match, matched)
+    report(0.7, "weighing the poses by contact with the platform and free space")
     U_match, V_match = (physics.decide(m, surface, scene, role, refit=lambda U, idx=region_idx[role], s=surface, r=role:
                                        match(_region_cloud(scan, idx, r), s, init=U, **match_options))
                         for m, surface, role in ((U_match, workpiece_surface, "workpiece"),

@@ -16,6 +16,8 @@ import numpy as np
 from . import pointops
 from .features import fpfh
 
+# The coarse voxel of a search by default: this fraction of the model's diagonal.
+COARSE_VOXELS_PER_DIAGONAL = 40
 # A voxel reached by fewer scan points than this fraction of a typical point's voxel holds only
 # stray points (dust, reflections): on a surface at the scan's density every voxel holds many.
 STRAY_DENSITY = 0.2

@@ -16,7 +16,7 @@ covers a real part of the model, leaves no large share of the view contradicted,
 motion, and no rival is within the statistical noise of its evidence (given the number of view
 cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
 The verdict's best has its near-symmetric turns tried again, each refined exactly like it
-(_turns_refined_like): one of them is the right pose when the search handed over a flip, and only
+(Judge._with_turns): one of them is the right pose when the search handed over a flip, and only
 such a turn, as converged as the best and with both fitting within FAR_OFF_FIT noises, is no rival
 when it leaves significantly more points far off (or takes the best's place when it leaves
 significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home),
@@ -35,6 +35,7 @@ from statistics import NormalDist
 import numpy as np
 
 from . import frames, global_search, pointops, visibility
+from .global_search import COARSE_VOXELS_PER_DIAGONAL
 from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
@@ -70,8 +71,6 @@ class MatchOptions:
     seed: int = 0
     blas_threads: int | None = 1  # OpenBLAS threads while matching (pointops.blas_threads); None: leave them
 
-
-COARSE_VOXELS_PER_DIAGONAL = 40
 # RANSAC poses kept by their votes, the distinct ones of them checked against the geometry, on at
 # most this many coarse scan points.
 RANSAC_KEPT, RANSAC_VERIFIED, VERIFY_POINTS = 200, 30, 600
@@ -109,8 +108,15 @@ VIEW_SAMPLES, VIEW_SAMPLES_FINE, CLOSE_CALL = 6000, 24000, 2.0
 MEDIUM_POINTS = 3000
 # Global candidates and near-symmetric turns scoring below this fraction of the best are not
 # refined further: after the coarse stage they cannot come close to it.  Turns are scored on this
-# many points.
-RIVAL_FLOOR, TURN_POINTS = 0.6, 1000
+# many points, and refined from this share of the model's diagonal (a turn about an axis a little off
+# lands that far from its home).
+RIVAL_FLOOR, TURN_POINTS, TURN_GATE = 0.6, 1000, 0.25
+# Turns that start within this angle (deg) and share of the diagonal of each other are refined as one
+# (from TURN_GATE they end as one), first on QUICK_TURN_POINTS; a refined turn is a rival only when it
+# explains at least TURN_FLOOR of what the best explains at its gate and its residual scale is at most
+# TURN_SIGMAS times the best's (a converged pose that leaves more unexplained, or fits that much worse,
+# is many standard errors behind by the view).
+TURNS_APART, QUICK_TURN_POINTS, TURN_FLOOR, TURN_SIGMAS = (10.0, 0.1), 300, 0.85, 3.0
 # A placed model must explain the scan to within its own noise: the robust residual scale may be
 # at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
 # matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
@@ -268,8 +274,17 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         gate = voxel  # a guess may be off by a few millimetres
 
     pointops.hand_back_freed_heap()  # the global search's temporaries: refinement's would pile on them
+    turned = {}  # pose (its bytes) -> its turns refined (_near_symmetric_turns): the verdict asks again for the best's
+
+    def turns_of(state):
+        key = state.T.tobytes()
+        if key not in turned:
+            turned[key] = _near_symmetric_turns(state, medium, surface, gate, fit_limit)
+        return turned[key]
+
     with timer("refine"):
-        best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless)
+        best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless,
+                               turns_of)
     sample = fine[:VERDICT_POINTS]
     support = Support.of(sample, voxel, surface.diagonal, options.seed)
 
@@ -284,10 +299,11 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         def widen(state):
             return _widened(state, medium, surface)
 
+        def finish(state):
+            return refine_given(state, medium, fine, surface, options.tolerance_mm, hopeless)
+
         return (judge, *judge.rank(best, rivals, polish, widen,
-                                   lambda state: _through_the_wall(state, medium, surface, gate),
-                                   lambda state: _turns_refined_like(state, medium, fine, surface, gate,
-                                                                     options.tolerance_mm, hopeless),
+                                   lambda state: _through_the_wall(state, medium, surface, gate), turns_of, finish,
                                    lambda state, noise: _slid_home(state, medium, surface, noise, polish, hopeless)))
 
     with timer("verdict"):
@@ -304,7 +320,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
             again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
             if again:
                 retried, retried_rivals = _refine(options.method, again, medium, fine, surface, gate,
-                                                  options.tolerance_mm, hopeless)
+                                                  options.tolerance_mm, hopeless, turns_of)
                 first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
         if again and second > first:
             with timer("verdict"):
@@ -410,14 +426,15 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
 
 
 def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-            tolerance: float, hopeless: float):
+            tolerance: float, hopeless: float, turns_of):
     """The best pose refined on all the fine points, and the distinct rivals refined on the medium
     ones (RefineStates, scan -> model).
 
     Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
     and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
     can tie with the right one, but only the right one brings the residuals down to the noise.
-    The model's near-symmetric turns of the winner are tried as rivals too.  ``hopeless``: see _polish.
+    The near-symmetric turns of the winner (``turns_of``: _near_symmetric_turns) are tried as rivals
+    too.  ``hopeless``: see _polish.
     """
     contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
     if len(contenders) == 1 and method != "robust":
@@ -434,7 +451,7 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
         from .paper_methods import refine_paper
 
         best = refine_paper(method, fine, surface, contenders[0], gate)
-    poses = [best] + states[1:] + _near_symmetric_turns(best, medium, surface, gate)
+    poses = [best] + states[1:] + turns_of(best)
     # In this order of preference, drop every pose that repeats an earlier one.
     keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), medium.mean(axis=0), 5.0,
                                   0.05 * surface.diagonal)
@@ -460,7 +477,7 @@ def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceMo
     """A pose refined on the ``medium`` points (a RefineState, scan -> model), finished as a match
     finishes its best: polished on all the ``fine`` points, refined again from a wider gate
     (_widened: a fit can stop an edge's width off) and polished again when that moved it.  A turn
-    of the best (_turns_refined_like) and a bootstrap refit (calibration) are finished this way.
+    of the best (Judge._with_turns) and a bootstrap refit (calibration) are finished this way.
     ``hopeless``: see _polish."""
     best = _polish(state, fine, surface, tolerance, hopeless)
     wide = _widened(best, medium, surface)
@@ -469,57 +486,82 @@ def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceMo
     return best
 
 
-def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
-    """The best pose turned by the model's near-symmetric turns (surface.flips: half turns about its
-    principal axes, quarter turns of a near-square, each refined into the model's best self-map) and
-    by half turns of the matched patch about its own principal axes, refined where they fit at all.
+def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float, fit_limit: float) -> list:
+    """The best pose turned (_turns) and refined where the turns fit at all (RefineStates, see
+    _refined_turns; ``gate``: the search's, ``fit_limit``: the verdict's limit on the residual scale).
 
     These are the poses a nearly symmetric part is mistaken for (turned over, end over end), and a
     feature search can miss them when the part's faces look alike, so they are always tried.  The
     patch's own half turns catch a scan laid inside out on a face (a flat face fits both ways; its
-    edges and the sides beyond tell which).  The verdict tries the turns of its own best again, refined
-    like it (_turns_refined_like).
+    edges and the sides beyond tell which), and a part seen on a few faces that fits its view turned
+    about them.  The verdict tries the turns of its own best again, refined to convergence like it where
+    they come near it (Judge._with_turns).
     """
+    return _refined_turns(best, _turns(best, medium, surface, best.sigma <= fit_limit), medium, surface, gate, fit_limit)
+
+
+def _turns(best, medium: np.ndarray, surface: SurfaceModel, exact_halves: bool = True) -> np.ndarray:
+    """The best pose (scan -> model) turned by the model's near-symmetric turns (surface.flips: half
+    turns about its principal axes and the turns that map most of it onto itself, each the model's
+    best self-map; quarter turns of a near-square), by the exact half turns about its principal axes
+    through its centroid (unless not ``exact_halves``: the flips are refined from them), and by half
+    turns of the matched patch about its own principal axes."""
+    from .symmetry import principal_axes, turn
+
     moved = frames.apply(best.T, medium[:TURN_POINTS])
     on_model = surface.nearest_cell(moved, best.gate)[2]
     patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
-    from .symmetry import principal_axes, turn
-
-    centre, axes, _ = principal_axes(patch, np.ones(len(patch)))
-    turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
-    turned = turns @ best.T
-    scores = inlier_scores(medium[:TURN_POINTS], surface, np.concatenate([best.T[None], turned]), best.gate)
-    return [coarse_to_fine([medium], surface, T, gate, surface.spacing)
-            for T, score in zip(turned, scores[1:]) if score >= RIVAL_FLOOR * scores[0]]
+    about = [principal_axes(patch, np.ones(len(patch)))]
+    if exact_halves:
+        about.append(principal_axes(surface.points, np.ones(len(surface.points))))
+    halves = [turn(axes[:, k], 180.0, centre) for centre, axes, _ in about for k in range(3)]
+    return np.concatenate([surface.flips.reshape(-1, 4, 4), halves]) @ best.T
 
 
-def _turns_refined_like(best, medium: np.ndarray, fine: np.ndarray, surface: SurfaceModel, gate: float,
-                        tolerance: float, hopeless: float) -> list:
-    """The best pose's near-symmetric turns, each refined to convergence exactly as the best was
-    (refine_given: polished on all the fine points, widened, polished again if that moved it): the
-    model's flips (surface.flips) and the exact half turns about its principal axes through its
-    centroid, those that still fit at the search's gate, distinct from the best and each other.
+def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: SurfaceModel, gate: float,
+                   fit_limit: float) -> list:
+    """The ``turned`` poses (scan -> model) each refined from TURN_GATE of the model's diagonal (on
+    TURN_POINTS, then on the medium points) and kept when it then explains the scan about as well as
+    the best (TURN_FLOOR of its score on TURN_POINTS at the best's gate, TURN_SIGMAS of its residual
+    scale), distinct from the best and each other (RefineStates).  Judged after they are refined, every
+    time: a turn about an axis a little off (a patch's principal axis, or a model whose legs differ in
+    length) lands a centimetre or more from its home and scores as nothing there, and from the
+    search's ``gate`` it would never slide home.  A best that does not fit the scan (its residual scale above ``fit_limit``, the
+    verdict's) is no yardstick for that: its turns are refined from the search's gate where they score
+    RIVAL_FLOOR of it there (a flip the search handed over comes home so)."""
+    points = medium[:TURN_POINTS]
+    centre = medium.mean(axis=0)
+    # Turns that start as one pose end as one (a flip and the exact half turn about the same axis): refine
+    # each once.
+    if not best.sigma <= fit_limit:
+        scores = inlier_scores(points, surface, turned, gate)
+        starts = global_search.distinct(turned, scores, centre, TURNS_APART[0], TURNS_APART[1] * surface.diagonal)
+        best_score = inlier_scores(points, surface, [best.T], gate)[0]
+        states = [coarse_to_fine([medium], surface, turned[i], gate, surface.spacing)
+                  for i in starts if scores[i] >= RIVAL_FLOOR * best_score]
+        return _apart_from(best, states, centre)
+    starts = global_search.distinct(turned, np.zeros(len(turned)), centre, TURNS_APART[0],
+                                    TURNS_APART[1] * surface.diagonal)
+    # First on a few points from the wide gate: a turn that then explains much less than the best cannot
+    # come close to it on more.
+    quick = [coarse_to_fine([medium[:QUICK_TURN_POINTS]], surface, turned[i], TURN_GATE * surface.diagonal,
+                            surface.spacing) for i in starts]
+    scores = inlier_scores(points, surface, [best.T] + [state.T for state in quick],
+                           max([best.gate] + [state.gate for state in quick]))
+    states = _apart_from(best, [coarse_to_fine([points, medium], surface, state.T, state.gate, surface.spacing)
+                                for state, score in zip(quick, scores[1:]) if score >= RIVAL_FLOOR * scores[0]], centre)
+    if not states:
+        return []
+    scores = inlier_scores(points, surface, [best.T] + [state.T for state in states], best.gate)
+    return [state for state, score in zip(states, scores[1:])
+            if score >= TURN_FLOOR * scores[0] and not state.sigma > TURN_SIGMAS * best.sigma]
 
-    The verdict's best may not be the pose whose turns the refinement tried (_near_symmetric_turns):
-    a flip chosen by its view evidence, when the search never proposed the right pose, has the right
-    pose among its turns.  And a turn refined less than the best is judged off its best: it leaves
-    scan points far off the part that a converged turn would not, so only these turns may be ruled
-    out by the points they leave far off (see Judge.rank and _verdict)."""
-    from .symmetry import principal_axes, turn
 
-    centre, axes, _ = principal_axes(surface.points, np.ones(len(surface.points)))
-    turns = np.concatenate([surface.flips.reshape(-1, 4, 4), [turn(axes[:, k], 180.0, centre) for k in range(3)]])
-    turned = turns @ best.T
-    # Scored at the search's gate: a turn of a near-symmetric part lands up to a gate off its home.
-    scores = inlier_scores(medium[:TURN_POINTS], surface, np.concatenate([best.T[None], turned]), gate)
-    # A flip and the exact half turn about the same axis start within a gate of each other: one will do.
-    starts = global_search.distinct(turned, scores[1:], medium.mean(axis=0), 5.0, gate)
-    states = [coarse_to_fine([medium], surface, turned[i], gate, surface.spacing)
-              for i in starts if scores[1 + i] >= RIVAL_FLOOR * scores[0]]
+def _apart_from(best, states: list, centre: np.ndarray) -> list:
+    """The states that differ from the best and from each earlier one (2 degrees, two of the best's gates)."""
     poses = [best] + states
-    keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), medium.mean(axis=0), 2.0,
-                                  2 * best.gate)
-    return [refine_given(poses[i], medium, fine, surface, tolerance, hopeless) for i in keep if i]
+    keep = global_search.distinct([p.T for p in poses], -np.arange(len(poses)), centre, 2.0, 2 * best.gate)
+    return [poses[i] for i in keep if i]
 
 
 def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
@@ -600,14 +642,16 @@ class Judge:
         if self.viewpoint is not None:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
-    def rank(self, best, rivals, polish, widen, through, turns, home=lambda state, noise: state):
+    def rank(self, best, rivals, polish, widen, through, turns, finish, home=lambda state, noise: state):
         """(best state, [{"T", "evidence", "z", "far_z", "other_side", "turn"}, best first]): the poses not
         equivalent under the model's symmetries, weighed by view evidence.  Every pose is refined again
         from a wider gate first (``widen``): a fit can stop an edge's width off, its edge points dropped
         as outliers, and from further out it slides home.  A pose whose evidence is significantly above
         the best's becomes the best (``polish`` finishes it like the best), and a best whose view shows
         a misfit (scan points hidden or past its outline, surface missing) is widened again.  Then the
-        best's near-symmetric turns, refined like it (``turns``), are weighed with it (_with_turns)."""
+        best's near-symmetric turns (``turns``: _near_symmetric_turns), each that comes near it by the
+        view refined to convergence like it (``finish``: refine_given) and slid ``home`` beside a best
+        that fits, are weighed with it (_with_turns)."""
         if self.options.method == "robust":  # each pose slides home, or it is judged off its best
             rivals = [widen(r) for r in rivals]
             wide = widen(best)
@@ -653,8 +697,11 @@ class Judge:
                 if _moved(other.T, poses[0].T, self.sample.mean(axis=0), poses[0].gate):
                     poses.append(other)
                     weighed.append(self.evidence(other.T))
-            poses, weighed, turned = self._with_turns(poses, weighed, [home(t, self.noise) for t in turns(poses[0])],
-                                                      polish)
+            # A turn is slid home only beside a best that fits the scan (within the verdict's limit): the turns
+            # of a pose that does not (a model in another object's points) fit no better, and none comes home.
+            fits = poses[0].sigma <= MAX_NOISE_RATIO * self.noise + self.options.tolerance_mm
+            poses, weighed, turned = self._with_turns(
+                poses, weighed, turns(poses[0]), lambda t: home(finish(t), self.noise) if fits else finish(t))
         else:
             turned = [False] * len(poses)
         # "far_z" is weighed only for a result that could be "ok" (weigh_far_off): it costs an exact
@@ -679,34 +726,44 @@ class Judge:
         leaves far off evidence against it rather than a sign that it has not converged."""
         return bool(state.sigma <= FAR_OFF_FIT * self.noise)
 
-    def _with_turns(self, poses: list, weighed: list, turns: list, polish):
+    def _with_turns(self, poses: list, weighed: list, turns: list, finish):
         """(poses, their evidence, whether each is a turn of the best refined like it): the best's
-        near-symmetric turns (_turns_refined_like, not a symmetry of the model away from it) join the
-        poses, each replacing the rivals it repeats (refined less); a rival that repeats the best is
-        dropped.  A turn better than the best by the view evidence, or as good by it and leaving
-        significantly fewer scan points far off the part (far_off_test) while both fit within
-        FAR_OFF_FIT noises, becomes the best; the best it replaces is then one of its turns."""
+        near-symmetric turns (not a symmetry of the model away from it) join the poses, each replacing
+        the rivals it repeats (refined less); a rival that repeats the best is dropped.  Each turn that
+        comes within CLOSE_CALL times the rival significance of the best by the view is first refined to
+        convergence like it (``finish``); one further behind is listed as it is, a rival of no one.  A
+        turn better than the best by the view evidence, or as good by it and leaving significantly fewer
+        scan points far off the part (far_off_test) while both fit within FAR_OFF_FIT noises, becomes
+        the best; the best it replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
 
         def near(a, b) -> bool:
             return (frames.rotation_between_deg(a.T, b.T) <= 2.0
                     and np.linalg.norm(frames.apply(a.T, centre[None]) - frames.apply(b.T, centre[None])) <= 2 * b.gate)
 
-        turns = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
+        def close(state) -> bool:
+            return visibility.compare(weighed[0].cells, self.evidence(state.T).cells, CELL_VARIANCE_FLOOR) < CLOSE_CALL * sig
+
+        turns = [t for t in turns if not near(t, poses[0])]
+        finished = [close(t) for t in turns]
+        turns = [finish(t) if done else t for t, done in zip(turns, finished)]
+        kept = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
+        finished = [done for t, done in zip(turns, finished) if any(t is k for k in kept)]
+        turns = kept
         # A rival refined onto the best since it was found (widened, laid through the wall and back) is no
         # rival; one on the other face of a wall thinner than two gates lies as near, and still is.
         rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) and not self._faces_apart(t.T, poses[i].T)
                                                         for t in [poses[0]] + turns)]
         poses = [poses[0]] + turns + [poses[i] for i in rest]
         weighed = [weighed[0]] + [self.evidence(t.T) for t in turns] + [weighed[i] for i in rest]
-        turned = [False] + [True] * len(turns) + [False] * len(rest)
-        if not turns:
+        turned = [False] + finished + [False] * len(rest)
+        if not any(finished):
             return poses, weighed, turned
         if not self.fine and any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
                                  < CLOSE_CALL * sig for e in weighed[1:len(turns) + 1]):
             self._level(fine=True)  # a close call: weigh again, finely
             weighed = [self.evidence(p.T) for p in poses]
-        for i in sorted(range(1, len(turns) + 1), key=lambda i: -weighed[i].score):
+        for i in sorted((i for i in range(1, len(turns) + 1) if turned[i]), key=lambda i: -weighed[i].score):
             z = visibility.compare(weighed[0].cells, weighed[i].cells, CELL_VARIANCE_FLOOR)
             if z < -sig or (z < sig and self._fits(poses[0]) and self._fits(poses[i])
                             and self._far_off(self._distances(poses[0].T), poses[i].T) <= -sig):

@@ -138,7 +138,7 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
         platform_idx, objects, labels = valid[platform.below], valid[~platform.below], platform.labels
     report = progress or (lambda fraction, message: None)
     surfaces = {"reference": reference, "workpiece": workpiece}
-    near_mm = {"reference": max(2.0, 3 * spacing), "workpiece": max(3.0, 5 * spacing)}
+    near_mm = {role: joins_within(role, spacing) for role in ("reference", "workpiece")}
     # Both orders search some clusters alike (the reference's own, when the workpiece is found first):
     # each cluster is searched once per model.
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
@@ -262,6 +262,12 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
     return found
 
 
+def joins_within(role: str, spacing: float) -> float:
+    """How near its placed model (mm) a scan point joins an object's region, for a scan of this spacing:
+    the workpiece's farther (clay added since its model was made lies a little off it)."""
+    return max(2.0, 3 * spacing) if role == "reference" else max(3.0, 5 * spacing)
+
+
 def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict) -> MatchResult:
     """The match on a final region, started from the pose found while locating it; its candidates
     and ambiguity come from the global search that found it.  When the refit's verdict moved to
@@ -300,7 +306,11 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
     best = None
     for attempt in range(attempts):
         result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
-        again = best is not None and _same_pose(result, best, surface)
+        # Back to a pose found before, or to one the search before listed beside its best (a tie two
+        # searches settle either way).
+        again = best is not None and result.matrix is not None and any(
+            _same_matrix(result.matrix, np.asarray(U), surface)
+            for U in [best.matrix] + [c["matrix"] for c in best.candidates[1:]] if U is not None)
         if best is None or rank(result) > rank(best):
             best = result
         if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
@@ -317,8 +327,12 @@ def _same_pose(first: MatchResult, second: MatchResult, surface: SurfaceModel) -
     """Whether two matches placed the model alike (within SAME_POSE_DEG and SAME_POSE_DIAGONALS)."""
     if first.matrix is None or second.matrix is None:
         return False
-    return (frames.rotation_between_deg(first.matrix, second.matrix) < SAME_POSE_DEG
-            and np.linalg.norm(first.matrix[:3, 3] - second.matrix[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
+    return _same_matrix(first.matrix, second.matrix, surface)
+
+
+def _same_matrix(a: np.ndarray, b: np.ndarray, surface: SurfaceModel) -> bool:
+    return (frames.rotation_between_deg(a, b) < SAME_POSE_DEG
+            and np.linalg.norm(a[:3, 3] - b[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
 
 
 @dataclass
@@ -488,6 +502,14 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
     return cell_labels[inverse]
 
 
+def in_clusters(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Which points belong to a cluster of at least MIN_CLUSTER_POINTS at the link objects are split by
+    (LINK_SPACINGS of the scan's ``spacing``): surfaces, not stray points nor mixed pixels strung
+    sparsely along the rays past an edge."""
+    labels = _clusters(points, LINK_SPACINGS * spacing)
+    return np.bincount(labels)[labels] >= MIN_CLUSTER_POINTS if len(labels) else np.zeros(0, bool)
+
+
 def _present(labels: np.ndarray) -> np.ndarray:
     """The cluster labels that occur, in order (np.unique's answer, counted rather than sorted)."""
     return np.flatnonzero(np.bincount(labels)) if len(labels) else np.empty(0, dtype=np.int64)
@@ -556,7 +578,7 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
             sunk = True
             continue
         if result.matrix is not None and result.fitness < MIN_FITNESS[role]:
-            near = _near(points[members], surface, result.matrix, near_mm)
+            near = near_points(points[members], surface, result.matrix, near_mm)
             if near.sum() < MIN_CLUSTER_POINTS:
                 continue
             matched = members[near]
@@ -570,6 +592,8 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
             continue
         if result.ok:
             return result, rejected, sunk, matched
+        if result.status != FAILED and result.fitness >= GOOD_FITNESS[role]:
+            return result, rejected, sunk, matched  # the object: its doubt is which pose, not which cluster
         if result.status != FAILED and fallback[0] is None:
             fallback = result, matched
     return fallback[0], rejected, sunk, fallback[1]
@@ -611,7 +635,7 @@ class _OnModel:
 def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> _OnModel:
     """The object a placed model explains, as whole clusters (so a region's fitness stays meaningful);
     where its cluster holds more than the model explains (objects touching), only the points near it."""
-    near = _near(points, surface, U, distance)
+    near = near_points(points, surface, U, distance)
     counts = np.bincount(labels, minlength=labels.max() + 1)
     on = np.bincount(labels, weights=near, minlength=len(counts))
     share = on / np.maximum(counts, 1)
@@ -636,7 +660,7 @@ def _on_surface(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, within
     return found & (np.abs(surface.plane_residuals(moved, idx)) <= within)
 
 
-def _near(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
+def near_points(points: np.ndarray, surface: SurfaceModel, U: np.ndarray, distance: float) -> np.ndarray:
     """Which scan points lie within ``distance`` of the model placed by U."""
     moved = frames.apply(frames.invert(U), points)
     # Only points within the model's box (and ``distance`` around it) can be near it: other objects are not.

@@ -392,9 +392,14 @@ class SurfaceModel:
         found = symmetry.find(points, normals, weights, self.tree, spacing, self.diagonal, symmetry_tolerance_mm, seed)
         self.symmetry_axes, self.symmetry_points = found["axes"], found["points"]
         self.symmetry_orders, self.symmetry_deviations_mm = found["orders"], found["deviations_mm"]
-        self.flips = found["flips"]
         self.sample_cover = self._sample_cover() if self.is_mesh else 0.0
         self._features: dict[float, tuple] = {}  # voxel -> coarse points, normals, FPFH
+        from .global_search import COARSE_VOXELS_PER_DIAGONAL
+
+        voxel = self.diagonal / COARSE_VOXELS_PER_DIAGONAL  # the features a match at the default voxel uses
+        self.flips = np.concatenate([found["flips"], symmetry.near_self_maps(
+            *self.coarse(voxel), voxel, self._self_match, found["flips"],
+            symmetry.principal_axes(points, weights)[0], spacing, self.diagonal, seed)])
         self._occupied: dict[float, np.ndarray] = {}  # cell size -> keys of the cells the surface passes through
         self._grids: dict[int, NearestGrid] = {}  # level -> the nearest-sample grid for its gates
         self._custom_grids: dict[tuple, NearestGrid] = {}  # (cell, bound) -> a grid of its own

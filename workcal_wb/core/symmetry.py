@@ -10,6 +10,11 @@ plane may carry a half turn), and any axis at all is possible only when all thre
 (a sphere, a cube).  Candidates are tried there, each refined by a few point-to-plane steps of the
 surface against itself, and kept when the surface lands on itself within the tolerance.
 
+A part can also map mostly onto itself by a turn about no principal axis (an L-block whose legs differ
+by a centimetre: the half turn that swaps them moves its axes).  ``near_self_maps`` finds such turns by
+registering the surface against itself: feature correspondences between points far apart, RANSAC,
+each pose refined into the best self-map and kept when most of the surface lands on itself.
+
 Everything found is plain numpy arrays (axes, points on them, orders, deviations): a cache of
 prepared models can store them as they are.
 """
@@ -43,6 +48,16 @@ NEIGHBOURS = 4
 # surface within the tolerance (with matching normals) for a symmetry: a feature covering more than
 # 0.3 % of the surface (an 8 x 8 mm mark on a 100 x 100 x 10 mm plate) breaks it.
 REFINE_STEPS, MIN_LANDED = 8, 0.997
+# A near self-map (near_self_maps) lands at least NEAR_SELF_SHARE of the check samples within
+# LANDED_SPACINGS sample spacings of the surface (with matching normals), turns by at least
+# MIN_TURN_DEG (a part sliding along itself, a long face, is not a turn a match confuses), and is one of
+# at most MAX_NEAR_SELF_MAPS.  Correspondences pair points at least SELF_APART of the diagonal apart
+# with their SELF_NEIGHBOURS nearest features; SELF_SAMPLES RANSAC samples, SELF_TRIED poses refined.
+NEAR_SELF_SHARE, LANDED_SPACINGS, MIN_TURN_DEG, MAX_NEAR_SELF_MAPS = 0.8, 2.0, 20.0, 2
+SELF_APART, SELF_NEIGHBOURS, SELF_SAMPLES, SELF_TRIED = 0.1, 4, 20000, 6
+# Half turns about this many axes spread over a hemisphere are screened by how near their moved samples
+# land (the median distance: a near self-map leaves a part of the surface off), the best few refined.
+HALF_TURN_AXES, HALF_TURNS_TRIED, HALF_TURN_SCREEN = 200, 4, 100
 # Moments within this ratio make a quarter turn about the third axis worth trying in every match
 # (a near-square plate); the half turns about the principal axes are always tried.
 NEAR_EQUAL_MOMENTS = 0.8
@@ -87,12 +102,13 @@ class SelfMatch:
         self.reach = 2 * spacing + 4 * tolerance  # a landed point has its nearest sample this close
         self.screen_limit = SCREEN_FRACTION * diagonal
 
-    def _residuals(self, T, subset):
+    def _residuals(self, T, subset, reach: float | None = None):
         """Point-to-plane distance of each moved sample to the best of its NEIGHBOURS nearest
-        samples whose normal agrees with its own (near an edge the nearest may lie on the other
-        face); inf where none is near (or only a thin wall's other side is)."""
+        samples within ``reach`` (default: a landed point's) whose normal agrees with its own (near an
+        edge the nearest may lie on the other face); inf where none is near (or only a thin wall's
+        other side is)."""
         moved = self.points[subset] @ T[:3, :3].T + T[:3, 3]
-        d, j = self.tree.query(moved, NEIGHBOURS, distance_upper_bound=self.reach)
+        d, j = self.tree.query(moved, NEIGHBOURS, distance_upper_bound=self.reach if reach is None else reach)
         found = np.isfinite(d)
         j = np.where(found, j, 0)
         r = np.abs(np.einsum("nkj,nkj->nk", moved[:, None] - self.points[j], self.normals[j]))
@@ -112,13 +128,16 @@ class SelfMatch:
         r, *_ = self._residuals(T, self.check)
         return float(np.sort(r)[int(np.ceil(MIN_LANDED * len(r))) - 1])  # inf when too few land
 
-    def refined(self, T) -> np.ndarray:
-        """T improved by point-to-plane steps of the moved samples against the surface."""
+    def refined(self, T, reach: float | None = None) -> np.ndarray:
+        """T improved by point-to-plane steps of the moved samples against the surface, from samples
+        ``reach`` mm off (default: a landed point's), the reach halving each step down to the default."""
         from .refine import gauss_newton_step, geman_mcclure
 
-        scale = self.reach / 2
+        reach = self.reach if reach is None else reach
+        scale = reach / 2
         for _ in range(REFINE_STEPS):
-            r, moved, j, ok = self._residuals(T, self.fit)
+            r, moved, j, ok = self._residuals(T, self.fit, reach)
+            reach = max(self.reach, reach / 2)
             if ok.sum() < 6:
                 break
             signed = np.einsum("ij,ij->i", moved[ok] - self.points[j[ok]], self.normals[j[ok]])
@@ -254,6 +273,73 @@ def _flips(centre, axes, moments, self_match: SelfMatch) -> np.ndarray:
         if not symmetric:
             kept.append(refined if self_match.screen_distance(refined) <= self_match.screen_limit else T)
     return np.array(kept).reshape(-1, 4, 4)
+
+
+def near_self_maps(coarse_points, coarse_normals, features, voxel: float, self_match: "SelfMatch",
+                   known: np.ndarray, centre: np.ndarray, spacing: float, diagonal: float,
+                   seed: int = 0) -> np.ndarray:
+    """(m, 4, 4) turns that map most of the surface onto itself without being symmetries, each refined
+    into its best self-map, those in ``known`` (the flips) left out: the poses a match must weigh
+    against each other whatever axis they turn about.  Tried: half turns about HALF_TURN_AXES directions
+    through the surface's ``centre`` (a near self-map moves the centroid little), the HALF_TURNS_TRIED
+    whose samples land nearest the surface; and the poses of a RANSAC of the surface against itself
+    (_self_registrations), which also finds turns by other angles."""
+    from .global_search import distinct
+
+    turns = [turn(axis, 180.0, centre) for axis in _hemisphere(HALF_TURN_AXES)]
+    screen = self_match.points[self_match.screen[:HALF_TURN_SCREEN]]
+    # Bounded: a query for a point far off the surface visits most of the tree.
+    landed = [np.median(self_match.tree.query(screen @ T[:3, :3].T + T[:3, 3],
+                                              distance_upper_bound=self_match.screen_limit)[0]) for T in turns]
+    tried = [turns[i] for i in np.argsort(landed, kind="stable")[:HALF_TURNS_TRIED]]
+    tried += list(_self_registrations(coarse_points, coarse_normals, features, voxel, diagonal, seed))
+    kept, shares = [], []
+    for T in tried:
+        T = self_match.refined(self_match.refined(T, 3 * voxel))
+        r, *_ = self_match._residuals(T, self_match.check)
+        share = float(np.mean(r <= LANDED_SPACINGS * spacing))
+        if (share < NEAR_SELF_SHARE or frames.rotation_between_deg(T, np.eye(4)) < MIN_TURN_DEG
+                or self_match.deviation(T) <= self_match.tolerance):
+            continue
+        kept.append(T)
+        shares.append(share)
+    if not kept:
+        return np.empty((0, 4, 4))
+    listed = np.concatenate([np.asarray(known).reshape(-1, 4, 4), np.array(kept)])
+    order = distinct(listed, np.r_[np.full(len(listed) - len(kept), 2.0), shares], centre, 5.0, 0.05 * diagonal)
+    new = [listed[i] for i in order if i >= len(listed) - len(kept)]
+    return np.array(new[:MAX_NEAR_SELF_MAPS]).reshape(-1, 4, 4)
+
+
+def _self_registrations(coarse_points, coarse_normals, features, voxel: float, diagonal: float, seed: int):
+    """Distinct poses (at most SELF_TRIED) that RANSAC finds taking the coarse surface onto itself:
+    each point paired with the SELF_NEIGHBOURS points of most alike features among those SELF_APART
+    of the diagonal away or more (nearer, the identity would win)."""
+    from .global_search import distinct, ransac_poses
+
+    n = len(coarse_points)
+    if n < 10:
+        return np.empty((0, 4, 4))
+    features = np.asarray(features, np.float32)
+    squared = np.einsum("ij,ij->i", features, features)
+    k = min(SELF_NEIGHBOURS, n - 1)
+    pairs = []
+    for start in range(0, n, 256):  # a block of rows at a time: n x n distances would not fit for large models
+        rows = slice(start, min(start + 256, n))
+        d = squared[rows, None] - 2 * features[rows] @ features.T + squared[None]
+        d[np.linalg.norm(coarse_points[rows, None] - coarse_points[None], axis=2) < SELF_APART * diagonal] = np.inf
+        j = np.argpartition(d, k - 1, axis=1)[:, :k]
+        ok = np.isfinite(np.take_along_axis(d, j, axis=1))
+        pairs.append(np.column_stack([np.broadcast_to(np.arange(start, rows.stop)[:, None], j.shape)[ok], j[ok]]))
+    i, j = np.concatenate(pairs).T
+    if len(i) < 2:
+        return np.empty((0, 4, 4))
+    poses, votes = ransac_poses(coarse_points[i], coarse_points[j], coarse_normals[i], coarse_normals[j],
+                                1.5 * voxel, np.random.default_rng(seed), samples=SELF_SAMPLES, keep=200,
+                                min_edge=3 * voxel)
+    # Apart by the RANSAC's own precision: one turn aligned two ways (an L's legs at their outer corner or
+    # at their ends) is two local minima of the refinement, and only one is the best self-map.
+    return poses[distinct(poses, votes, coarse_points.mean(axis=0), 10.0, 2 * voxel, SELF_TRIED)]
 
 
 def describe(axes, points, orders) -> list[str]:

@@ -183,6 +183,16 @@ class ScanView:
     nearest: np.ndarray  # per pixel of the window, inf where no scan point
     cells: np.ndarray  # footprint pixels, flat indices into the window
 
+    def at_depth_edge(self, margin: float) -> np.ndarray:
+        """Which points lie more than ``margin`` behind a scan point on their pixel or one next to it:
+        past a depth edge of the scan, where mixed pixels lie."""
+        rows, cols = self.view.shape
+        nearest_around = _around(self.nearest.reshape(rows, cols), "min").ravel()
+        inside = self.pixel >= 0
+        edge = np.zeros(len(self.pixel), bool)
+        edge[inside] = self.depth[inside] > nearest_around[self.pixel[inside]] + margin
+        return edge
+
     @classmethod
     def of(cls, points: np.ndarray, view: View) -> "ScanView":
         projected = view.coordinates(points)
@@ -213,13 +223,15 @@ class Evidence:
 
 
 def _around(image: np.ndarray, kind: str) -> np.ndarray:
-    """Over each pixel's 3 x 3 neighbourhood: the "max" (inf off the window), "any" or "all" (true
-    off the window)."""
+    """Over each pixel's 3 x 3 neighbourhood: the "max" or "min" (inf off the window), "any" or "all"
+    (true off the window)."""
     from scipy import ndimage
 
     square = np.ones((3, 3), bool)
     if kind == "max":
         return ndimage.maximum_filter(image, footprint=square, mode="constant", cval=np.inf)
+    if kind == "min":
+        return ndimage.minimum_filter(image, footprint=square, mode="constant", cval=np.inf)
     if kind == "any":
         return ndimage.binary_dilation(image, structure=square)
     return ndimage.binary_erosion(image, structure=square, border_value=1)
@@ -235,7 +247,9 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     model (see Evidence.off); in front of it they may be an occluder.
 
     Against the pose count: a scan point more than ``depth_margin`` behind the model's front surface
-    (over its whole 3 x 3 neighbourhood: the model would hide it), an empty footprint pixel with no
+    (over its whole 3 x 3 neighbourhood: the model would hide it) unless it lies at a depth edge of the
+    scan (more than ``depth_margin`` behind a scan point in that neighbourhood: a mixed pixel strung
+    between a near edge and what lies behind it is no evidence of what hides what), an empty footprint pixel with no
     scan point next to it where the model faces the sensor (missing), and a scan pixel just past the
     model's outline whose points lie on the plane of a flat model face ending there (the scanned
     face goes on where the model's ends: a misplaced outline), unless they lie on the model itself (a
@@ -251,6 +265,7 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     inside = scan.pixel >= 0
     hidden = np.zeros(len(weights), dtype=bool)
     hidden[inside] = scan.depth[inside] > around[scan.pixel[inside]] + depth_margin
+    hidden[inside] &= ~scan.at_depth_edge(depth_margin)[inside]
     per_point = np.where(hidden, HIDDEN, weights)
     total = np.bincount(scan.pixel[inside], per_point[inside], minlength=rows * cols)
     count = np.bincount(scan.pixel[inside], minlength=rows * cols)

@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import frames, pointops
 from ..atomic import atomic_write_text
+from .scenes import HEADING as SCENES_HEADING, UPRIGHT_L_HEADING
 
 WORKCAL, STOCK = "WorkCal", "Open3D stock"
 METHODS = (WORKCAL, STOCK)
@@ -199,7 +200,8 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
               "large": lambda: _large(seed, quick, log),
               "processes": lambda: _processes(shared, seed, quick, log),
               "verdicts": lambda: _verdicts(shared, seed, quick, log, runner),
-              "scenes": lambda: _scenes(shared, seed, log, runner)}
+              "scenes": lambda: _scenes(shared, seed, log, runner),
+              "lblock": lambda: _scenes(shared, seed, log, runner, upright_l=True)}
     if only is not None:
         section, missed = tables[only]()
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
@@ -240,9 +242,9 @@ def _matcher(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, lis
 
 VERDICTS_HEADING = "## Verdicts"
 PROCESSES_HEADING = "## Whole processes"
-SCENES_HEADING = "## Scenes"
 LARGE_HEADING = "## Large scans"
-SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING)  # after the match table, in this order
+# After the match table, in this order.
+SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING, UPRIGHT_L_HEADING)
 
 
 def _with_section(previous: str, section: str) -> str:
@@ -291,19 +293,23 @@ def _verdicts(shared: Path | None, seed: int, quick: bool, log, runner) -> tuple
     return section, [f"verdicts: {len(wrong_ok)} wrong pose(s) reported ok"] if wrong_ok else []
 
 
-def _scenes(shared: Path | None, seed: int, log, runner) -> tuple[str, list]:
-    """The scenes section (see scenes.py), computed in a child process, and the goals it missed."""
+def _scenes(shared: Path | None, seed: int, log, runner, upright_l: bool = False) -> tuple[str, list]:
+    """The scenes section, or the L-block on its foot's (see scenes.py), computed in a child process, and
+    the goals it missed."""
     from . import scenes
 
-    log(f"benchmark: scenes, {runner.describe()} ...")
-    rows = _in_child(_run_scenes, bunny_folder(shared), seed, runner)
+    log(f"benchmark: {'L-block on its foot' if upright_l else 'scenes'}, {runner.describe()} ...")
+    rows = _in_child(_run_scenes, bunny_folder(shared), seed, runner, upright_l)
+    if upright_l:
+        return scenes.table(rows, seed, runner.describe(), upright_l=True), scenes.goals(rows, None, "L-block on its foot")
     return scenes.table(rows, seed, runner.describe()), scenes.goals(rows)
 
 
-def _run_scenes(bunny, seed: int, runner, queue) -> None:
-    from .scenes import run as run_scenes
+def _run_scenes(bunny, seed: int, runner, upright_l: bool, queue) -> None:
+    from .scenes import run as run_scenes, upright_l_variants
 
-    queue.put(run_scenes(bunny, seed, log=lambda message: None, runner=runner))
+    specs = upright_l_variants(seed, bunny is not None) if upright_l else None
+    queue.put(run_scenes(bunny, seed, log=lambda message: None, runner=runner, specs=specs))
 
 
 def _run_verdicts(bunny, seed: int, views: int, runner, queue) -> None:

@@ -28,6 +28,9 @@ DEFAULT_AZIMUTH_DEG = 45.0  # sees the L-block's inner faces, with the workpiece
 DEFAULT_ELEVATION_DEG = 45.0
 DEFAULT_DISTANCE_MM = 1200.0  # the paper's "approximately 1.2 m scanning distance"
 _NEAR_MM = 1.0  # triangles closer to the scanner plane than this are not rendered
+# A depth edge: neighbouring pixels whose surfaces lie more than this apart in depth (mm).  A mixed pixel
+# there returns a depth this share of the way from the near surface to the far one (drawn uniformly).
+MIXED_JUMP_MM, MIXED_SPAN = 5.0, (0.1, 0.9)
 
 
 @dataclass
@@ -41,6 +44,7 @@ class Scanner:
     noise_sigma_mm: float = 0.1  # along the ray
     max_incidence_deg: float = 75.0
     seed: int = 0
+    mixed_pixel_share: float = 0.0  # returns turned into mixed pixels at depth edges, as a share of all returns
 
     def __post_init__(self):
         self.position = np.asarray(self.position, dtype=float)
@@ -54,6 +58,8 @@ class Scanner:
                              f"{self.pixel_pitch_mm} mm, {self.image_size}")
         if self.noise_sigma_mm < 0 or self.z_resolution_mm < 0 or not 0 < self.max_incidence_deg <= 90:
             raise InputError("scanner: noise and z resolution must be >= 0 mm, max incidence in (0, 90] deg")
+        if not 0 <= self.mixed_pixel_share < 1:
+            raise InputError(f"scanner: the share of mixed pixels must be in [0, 1), got {self.mixed_pixel_share}")
 
     @property
     def focus_distance_mm(self) -> float:
@@ -80,7 +86,7 @@ class Scanner:
                 "pixel_pitch_mm": self.pixel_pitch_mm, "image_size": list(self.image_size),
                 "focus_distance_mm": self.focus_distance_mm, "z_resolution_mm": self.z_resolution_mm,
                 "noise_sigma_mm": self.noise_sigma_mm, "max_incidence_deg": self.max_incidence_deg,
-                "seed": self.seed}
+                "seed": self.seed, "mixed_pixel_share": self.mixed_pixel_share}
 
     def ray_directions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Directions in S through pixel centres, scaled so that z = 1 (a point is depth * direction)."""
@@ -123,6 +129,10 @@ class Scanner:
         direction, length, tri, depth = direction[seen], length[seen], tri[seen], depth[seen]
         rng = np.random.default_rng(self.seed)
         depth = depth + rng.normal(0.0, self.noise_sigma_mm, len(depth)) / length
+        mixed = np.zeros(len(depth), bool)
+        if self.mixed_pixel_share > 0:
+            depth, mixed = _mixed_pixels(pixel[seen], depth, (rows, cols), self.mixed_pixel_share,
+                                         np.random.default_rng([self.seed, 1]))
         if self.z_resolution_mm > 0:
             depth = np.round(depth / self.z_resolution_mm) * self.z_resolution_mm
         return ScanResult(
@@ -136,6 +146,7 @@ class Scanner:
             W=scene.W,
             scanner=self,
             time_s=time.perf_counter() - started,
+            mixed=mixed,
         )
 
     @classmethod
@@ -160,6 +171,35 @@ class Scanner:
         seen = frames.apply(frames.invert(cls(position, target).frame()), points)
         slope = np.abs(seen[:, :2] / seen[:, 2:]).max(axis=0) / (0.5 * np.array(image_size))
         return (1 + margin) * float(np.linalg.norm(np.asarray(target) - position)) * float(slope.max())
+
+
+def _mixed_pixels(pixel: np.ndarray, depth: np.ndarray, shape: tuple, share: float, rng):
+    """(depths, which returns are mixed): up to ``share`` of the returns, drawn among the pixels on
+    either side of a depth edge (a 4-neighbour more than MIXED_JUMP_MM away in depth), each moved along
+    its ray to a depth between the edge's near and far surface."""
+    rows, cols = shape
+    image = np.full(rows * cols, np.inf)
+    image[pixel] = depth
+    image = image.reshape(rows, cols)
+    near_of, far_of = np.full((rows, cols), np.nan), np.full((rows, cols), np.nan)
+    for a, b in (((slice(None), slice(None, -1)), (slice(None), slice(1, None))),
+                 ((slice(None, -1), slice(None)), (slice(1, None), slice(None)))):
+        for here, there in ((a, b), (b, a)):
+            d, e = image[here], image[there]
+            with np.errstate(invalid="ignore"):
+                edge = np.isfinite(d) & np.isfinite(e) & (np.abs(d - e) > MIXED_JUMP_MM)
+            near, far = near_of[here], far_of[here]
+            near[edge], far[edge] = np.minimum(d, e)[edge], np.maximum(d, e)[edge]
+    candidates = np.flatnonzero(np.isfinite(near_of.ravel()))
+    index = np.full(rows * cols, -1)
+    index[pixel] = np.arange(len(pixel))
+    chosen = rng.permutation(candidates)[:int(round(share * len(depth)))]
+    span = rng.uniform(*MIXED_SPAN, len(chosen))
+    out, mixed = depth.copy(), np.zeros(len(depth), bool)
+    near, far = near_of.ravel()[chosen], far_of.ravel()[chosen]
+    out[index[chosen]] = near + span * (far - near)
+    mixed[index[chosen]] = True
+    return out, mixed
 
 
 def scan_part(mesh: Cloud, pose: np.ndarray, direction, distance_mm: float = 600.0, samples: int = 20000,
@@ -233,6 +273,7 @@ class ScanResult:
     W: np.ndarray  # ^B X
     scanner: Scanner
     time_s: float = 0.0
+    mixed: np.ndarray | None = None  # (N,) whether each return is a mixed pixel (between two surfaces)
 
     @property
     def V(self) -> np.ndarray:
