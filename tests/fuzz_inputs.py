@@ -82,11 +82,12 @@ def text_cloud(separator: str, header: str = "") -> bytes:
 
 def result_json() -> bytes:
     from workcal_wb.core import frames
-    from workcal_wb.core.result import CalibrationResult, MatchResult
+    from workcal_wb.core.result import RIVAL, CalibrationResult, Candidate, MatchResult, Reason
 
     W = frames.rigid(frames.from_rotvec([0.1, 0.2, -0.3])[:3, :3], [800.0, 100.0, 50.0])
     match = MatchResult("ok", "robust", W, rms_mm=0.07, n_inliers=900, percentiles_mm={"50": 0.05},
-                        candidates=[{"score": 1.0}], warnings=["a warning"])
+                        candidates=[Candidate(W, score=1.0)], warnings=["a warning"],
+                        ties=[Reason(RIVAL, "a rival")])
     result = CalibrationResult("ok", W, U=W, V=np.eye(4), workpiece=match, reference=match,
                                uncertainty={"toolpath_bound_mm": 0.03, "surface_bound_mm": 0.02, "method": "bootstrap"},
                                quality_gates=[{"name": "workpiece RMS", "value": 0.07, "limit": 0.3, "passed": True,

@@ -52,7 +52,8 @@ def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):
                       str(_indices(tmp_path, range(0, 3000))), "--reference-box", *box))
     assert code == 1
     result = json.loads((tmp_path / "result.json").read_text())
-    assert result["status"] == "failed" and any("planar" in r for r in result["reasons"]), result["reasons"]
+    assert result["status"] == "failed" and any(r["code"] == "scan_not_solid" and "planar" in r["text"]
+                                                for r in result["reasons"]), result["reasons"]
     assert not (tmp_path / "toolpath_calibrated.nc").exists()
 
 

@@ -14,7 +14,7 @@ from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_sca
 from workcal_wb.core.errors import Cancelled, InputError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.regions import find_regions, locate
-from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.result import MISFIT, NOT_FOUND, SCAN_NOT_SOLID, CalibrationResult, codes
 from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.scanner import Scanner
 from workcal_wb.core.simulate.scene import build_scene
@@ -201,7 +201,7 @@ def plain():
 def assert_not_found(result, pattern):
     """An object that is not in the scan makes a failed calibration (not an exception) that says which."""
     assert result.status == "failed" and result.W is None
-    assert any(re.search(pattern, reason) for reason in result.reasons), result.reasons
+    assert codes(result.reasons) == [NOT_FOUND] and re.search(pattern, str(result.reasons[0])), result.reasons
 
 
 def test_reference_out_of_view_is_named(plain):
@@ -235,7 +235,7 @@ def test_wrong_model_fails_without_polishing_poses_that_cannot_fit(plain, monkey
             return _original(*args, **kwargs)
         monkeypatch.setattr(owner, name, counted)
     result = match_module.match(Cloud(block[::2], name="block"), wrong)
-    assert result.status == "failed" and any("does not fit the scan" in r for r in result.reasons), result.reasons
+    assert result.status == "failed" and MISFIT in codes(result.reasons), result.reasons
     assert len(result.candidates) > 1, "the wrong model's poses have rivals"
     assert calls["refine_exact"] == 0 and calls["refine"] <= 60 and calls["_distances"] == 0, calls
 
@@ -253,7 +253,8 @@ def test_workpiece_region_on_the_platform_fails_with_the_reason(plain):
     regions = {"workpiece": platform, "reference": np.flatnonzero(scan.mask("reference"))}
     result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
     assert result.status == "failed" and result.W is None
-    assert any("workpiece" in r and "planar" in r for r in result.reasons), result.reasons
+    assert any(r.code == SCAN_NOT_SOLID and r.subject == "workpiece" and "planar" in str(r) for r in result.reasons), \
+        result.reasons
 
 
 def test_scans_in_different_units_are_refused():

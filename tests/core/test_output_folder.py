@@ -97,7 +97,8 @@ def test_a_run_that_finds_no_workpiece_leaves_no_earlier_result(ok_run, scene, t
     code = main(args)
     assert code == 1  # the calibration ran and found nothing: failed, as match says for the same cause
     result = json.loads((out / "result.json").read_text())
-    assert result["status"] == "failed" and any("sphere.xyz: not found" in r for r in result["reasons"])
+    assert result["status"] == "failed" and [r["code"] for r in result["reasons"]] == ["not_found"]
+    assert "sphere.xyz: not found" in result["reasons"][0]["text"]
     assert programs(out) == []
     assert_manifest_is_the_folder(out, "failed")
 

@@ -163,3 +163,29 @@ def test_a_result_read_back_gives_the_text_and_fingerprint_of_its_file(tmp_path)
         back = CalibrationResult.from_json(tmp_path / "result.json", with_regions=with_regions)
         assert back.to_json_text() == text
         assert result_fingerprint(back) == result_fingerprint(written)
+
+
+def test_reasons_and_candidates_keep_their_codes_and_names_through_result_json(tmp_path):
+    """A reason is a code with its sentence (and the object it is about), a candidate pose a record of
+    named fields: both come back from result.json as they were, and a reason an older WorkCal wrote as a
+    bare sentence reads with the code "unknown"."""
+    from workcal_wb.core.result import RIVAL, SINKS, UNCERTAINTY, UNKNOWN, Candidate, Reason, codes
+
+    tie = Reason(RIVAL, "1 clearly different pose(s) explain the view about as well")
+    match = MatchResult("ambiguous", "robust", W, reasons=[tie, Reason(SINKS, "it sinks")], ties=[tie],
+                        candidates=[Candidate(W), Candidate(W @ frames.rigid(frames.rot_z(180.0)), score=0.9,
+                                                            standard_errors_below_best=1.2, rival=True,
+                                                            ruled_out_by="free space")])
+    reasons = [tie.within("reference match", "reference"), Reason(UNCERTAINTY, "uncertainty 0.4 mm")]
+    path = tmp_path / "result.json"
+    written = CalibrationResult("failed", W, U=W, V=np.eye(4), workpiece=match, reference=match, reasons=reasons)
+    written.to_json(path)
+    data = json.loads(path.read_text())
+    assert data["reasons"][0] == {"code": "rival", "text": "reference match: " + str(tie), "subject": "reference"}
+    back = CalibrationResult.from_json(path)
+    assert back.reasons == reasons and codes(back.reference.reasons) == [RIVAL, SINKS] and back.reference.ties == [tie]
+    assert back.reference.candidates == match.candidates
+    assert back.reference.candidates[1].ruled_out_by == "free space" and back.reference.candidates[1].rival
+    data["reasons"] = ["an older sentence"]
+    path.write_text(json.dumps(data))
+    assert CalibrationResult.from_json(path).reasons == [Reason(UNKNOWN, "an older sentence")]

@@ -78,5 +78,5 @@ def test_an_l_block_on_its_foot_is_never_ok_turned_over(bunny, seed, noise):
     right_w = result.W is not None and frames.rotation_between_deg(result.W, cell.W) < 0.3
     assert result.status != "ok" or right_w, result.reasons
     assert result.reference.status != "ok" or frames.rotation_between_deg(result.V, cell.V) < 0.3
-    named = [c for c in result.reference.candidates if frames.rotation_between_deg(np.array(c["matrix"]), cell.V) < 1]
+    named = [c for c in result.reference.candidates if frames.rotation_between_deg(c.matrix, cell.V) < 1]
     assert right_w or named, result.reasons

@@ -16,6 +16,8 @@ from workcal_wb.core import frames, raycast
 from workcal_wb.core.benchmark.cases import random_motion, zoomed_on_workpiece
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
+from workcal_wb.core.result import (FACE_CONTINUED, NOISE_ABOVE_TOLERANCE, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SYMMETRIC,
+                                     codes)
 from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.scanner import scan_part
 from workcal_wb.core.simulate.scene import build_scene
@@ -109,11 +111,11 @@ def test_four_fold_part_is_ambiguous_naming_the_symmetry(seed):
     assert len(fourfold) == 1
     assert abs(np.dot(fourfold[0]["axis"], normal)) > 0.999
     assert "turning the part 90 degrees about its axis" in fourfold[0]["description"]
-    assert any("symmetric" in r and "90 degrees" in r for r in result.reasons)
+    assert any(r.code == SYMMETRIC and "90 degrees" in str(r) for r in result.reasons)
     # Candidates are listed up to the symmetry: none is the best turned by a quarter turn.
     best = frames.invert(result.matrix)
     for candidate in result.candidates[1:]:
-        assert not surface.maps_onto_itself(frames.invert(np.asarray(candidate["matrix"])) @ frames.invert(best))
+        assert not surface.maps_onto_itself(candidate.to_model @ frames.invert(best))
 
 
 @pytest.mark.parametrize("workpiece, seed", [("car", 2), ("plate", 7)])
@@ -132,8 +134,8 @@ def test_noise_above_the_tolerance_is_said_in_one_sentence(workpiece, seed):
     surface = SurfaceModel(model)
     strict = match(Cloud(points), surface, tolerance_mm=0.3)
     assert strict.status == "failed"
-    sentences = [r for r in strict.reasons if "noise" in r and "0.3 mm tolerance" in r]
-    assert len(sentences) == 1 and sentences[0].count(". ") == 0
+    sentences = [str(r) for r in strict.reasons if r.code == NOISE_ABOVE_TOLERANCE]
+    assert len(sentences) == 1 and sentences[0].count(". ") == 0 and "0.3 mm tolerance" in sentences[0]
     assert 0.9 < strict.noise_mm < 1.8  # noise along the rays, measured across the surface
     assert f"{strict.noise_mm:.2f} mm" in sentences[0]
     relaxed = match(Cloud(points), surface, tolerance_mm=2.0)
@@ -177,8 +179,8 @@ def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name, monkeypa
     right = _right(surface, result.matrix, truth)
     assert result.status != "ok" or right, result.reasons
     assert result.status == "ok" and right, result.reasons
-    flips = [c for c in result.candidates[1:] if c["rotation_from_best_deg"] > 170 and c["turn_of_best"]]
-    assert flips and all(c["far_off_standard_errors"] >= 3 and not c.get("rival") for c in flips)
+    flips = [c for c in result.candidates[1:] if c.rotation_from_best_deg > 170 and c.turn_of_best]
+    assert flips and all(c.far_off_standard_errors >= 3 and not c.rival for c in flips)
 
 
 def test_flip_chosen_over_the_right_pose_is_never_ok(verdict_views):
@@ -238,12 +240,12 @@ def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
     remaining point lies on the part in both poses, so nothing in the scan tells them apart."""
     points, truth, surface = verdict_views["notched plate #4"]
     full = match(Cloud(points), surface)
-    flip = min((c for c in full.candidates[1:] if c["rotation_from_best_deg"] > 90),
-               key=lambda c: c["standard_errors_below_best"])
-    on_flip = surface.exact_distance(frames.apply(frames.invert(np.asarray(flip["matrix"])), points)) < 0.3
+    flip = min((c for c in full.candidates[1:] if c.rotation_from_best_deg > 90),
+               key=lambda c: c.standard_errors_below_best)
+    on_flip = surface.exact_distance(frames.apply(flip.to_model, points)) < 0.3
     result = match(Cloud(points[on_flip]), surface)
     assert result.status == "ambiguous", result.reasons
-    assert any("clearly different pose" in r or "other side" in r for r in result.reasons), result.reasons
+    assert {RIVAL, OTHER_SIDE} & set(codes(result.reasons)), result.reasons
 
 
 def _thin_mesh_judge():
@@ -302,9 +304,9 @@ def test_a_scale_error_does_not_make_a_wrong_pose_ok():
     result = match(Cloud(data["scan"], name="plate scanned 1 % large"), surface, tolerance_mm=0.3, seed=0)
     assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.candidates[:3]
     if not right(surface, result.matrix, data["truth"]):
-        truth_a_rival = any(c.get("rival") and right(surface, np.asarray(c["matrix"]), data["truth"])
+        truth_a_rival = any(c.rival and right(surface, c.matrix, data["truth"])
                             for c in result.candidates[1:])  # its flip chosen, the truth listed beside it
-        assert truth_a_rival or any("past the model's edge" in reason for reason in result.reasons), result.reasons
+        assert truth_a_rival or FACE_CONTINUED in codes(result.reasons), result.reasons
 
 
 def _plate_rows(x_end: float = 60.0, row_gap: float = 4.0, step: float = 0.7) -> np.ndarray:
@@ -344,8 +346,7 @@ def test_a_part_longer_than_its_model_is_not_ok():
     result = match(Cloud(frames.apply(random_motion(rng), points), name="longer plate"), surface, tolerance_mm=0.3,
                    seed=0)
     assert result.status != "ok"
-    assert any("past the model's edge" in reason or "past the placed model's outline" in reason
-               for reason in result.reasons), result.reasons
+    assert {FACE_CONTINUED, OUTLINE_CONTINUED} & set(codes(result.reasons)), result.reasons
 
 
 def test_rows_of_the_right_plate_leave_no_face_running_on():
@@ -376,7 +377,7 @@ def test_a_low_noise_scan_of_the_right_pose_runs_on_past_no_face(seed):
     points, truth = _view(mesh, seed, noise=0.01)
     result = match(Cloud(points, name="box"), surface, tolerance_mm=0.3, seed=0)
     assert right(surface, result.matrix, truth)
-    assert not any("past the model's edge" in reason for reason in result.reasons), result.reasons
+    assert FACE_CONTINUED not in codes(result.reasons), result.reasons
 
 
 def test_a_point_model_is_not_weighed_by_faces_it_does_not_have():

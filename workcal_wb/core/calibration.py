@@ -22,7 +22,8 @@ from .geometry import Cloud
 from .refine import coarse_to_fine
 from .match import MEDIUM_POINTS, METHODS, MatchOptions, match, match_pose, refine_given
 from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
-from .result import AMBIGUOUS, FAILED, OK, CalibrationResult, MatchResult
+from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, UNCERTAINTY, CalibrationResult, MatchResult,
+                     Reason)
 from .surface import SurfaceModel
 from .surroundings import judged_in_surroundings
 
@@ -133,7 +134,8 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
                            progress=lambda f, m: report(0.6 * f, m), up=options.up,
                            viewpoint=scanner_origin(scan, options), blas_threads=options.blas_threads)
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
-            return CalibrationResult(FAILED, W=None, reasons=[str(exc)], warnings=warnings, regions={"source": "auto"},
+            return CalibrationResult(FAILED, W=None, reasons=[Reason(NOT_FOUND, str(exc))], warnings=warnings,
+                                     regions={"source": "auto"},
                                      tolerance_mm=options.tolerance_mm, seed=options.seed,
                                      inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
                                      time_s=time.perf_counter() - started)
@@ -178,7 +180,7 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
                   + [f"reference match: {w}" for w in V_match.warnings])
     failed = [(role, m) for role, m in (("workpiece", U_match), ("reference", V_match)) if m.matrix is None]
     if failed:
-        reasons = [f"{role} match failed: {r}" for role, m in failed for r in m.reasons]
+        reasons = [r.within(f"{role} match failed", role) for role, m in failed for r in m.reasons]
         return CalibrationResult(FAILED, W=None, U=U_match.matrix, V=V_match.matrix, reasons=reasons,
                                  time_s=time.perf_counter() - started, **result)
 
@@ -190,10 +192,15 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     strained = _distortion(scan, region_idx, surfaces, (U_match, V_match), toolpath_points, options)
     uncertainty.update(distortion_shift_mm=strained["shift_mm"], distortion_scale_pct=strained["scale_pct"],
                        distortion_strain_pct=strained["largest_strain_pct"])
+    uncertainty["distortion_unverified_shift_mm"] = strained["shift_if_scanner_mm"]
     if strained["workpiece_own_pct"]:
-        result["warnings"].append(f"the workpiece reads a strain of {strained['workpiece_own_pct']:.2f} % against its "
-                                  "model that the reference does not: taken as the part's own (it differs from its "
-                                  "model), not the scanner's")
+        result["warnings"].append(
+            f"the workpiece reads a strain of {strained['workpiece_own_pct']:.2f} % against its model that the "
+            "reference does not confirm: taken as the part's own (a part differs from its model: clay, a casting, "
+            f"a model merged from other scans); were it the scanner's, W would move up to "
+            f"{strained['shift_if_scanner_mm']:.3f} mm at the {'toolpath' if toolpath_points is not None else 'part'}. "
+            "Only a reference that shows that strain can check the scanner: scan it so that two parallel faces "
+            "show along each direction (an L-block's inner faces as well as its outer ones)")
     gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm)
     status, reasons = _status(U_match, V_match, gates)
     report(1.0, f"calibration {status}")
@@ -403,24 +410,28 @@ def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> n
 
 
 def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float) -> list:
+    """The gates a calibration passes to be "ok", each with a stable "code" (its failing Reason's)."""
     gates = []
     for role, m in (("workpiece", U_match), ("reference", V_match)):
-        gates.append({"name": f"{role} match status", "value": m.status, "limit": OK, "passed": m.status == OK, "unit": ""})
-        gates.append({"name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
+        gates.append({"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
+                      "passed": m.status == OK, "unit": ""})
+        gates.append({"code": f"{role}_rms", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
                       "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})
         share = MIN_WITHIN_TOLERANCE_PCT[role]
-        gates.append({"name": f"{role} points within tolerance", "value": m.within_tolerance_pct, "limit": share,
-                      "passed": bool(m.within_tolerance_pct >= share), "unit": "%"})
-        gates.append({"name": f"{role} region explained by its model", "value": 100 * m.fitness,
-                      "limit": 100 * MIN_FITNESS[role], "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%"})
+        gates.append({"code": f"{role}_within_tolerance", "name": f"{role} points within tolerance",
+                      "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
+                      "unit": "%"})
+        gates.append({"code": f"{role}_explained", "name": f"{role} region explained by its model",
+                      "value": 100 * m.fitness, "limit": 100 * MIN_FITNESS[role],
+                      "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%"})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
     value = uncertainty[key]
-    gates.append({"name": f"uncertainty at the {where}", "value": value, "limit": tolerance,
+    gates.append({"code": UNCERTAINTY, "name": f"uncertainty at the {where}", "value": value, "limit": tolerance,
                   "passed": bool(value <= tolerance), "unit": "mm"})
     # A distortion's shift is a bias the bootstrap cannot see: it has what the spread leaves of the tolerance.
     shift, limit = uncertainty["distortion_shift_mm"], max(tolerance - value, 0.0)
-    gates.append({"name": f"shift of W by the scan distortion at the {where}", "value": shift,
+    gates.append({"code": DISTORTION, "name": f"shift of W by the scan distortion at the {where}", "value": shift,
                   "limit": round(limit, 4), "passed": bool(shift <= limit), "unit": "mm",
                   "why": f"the scan is {uncertainty['distortion_scale_pct']:+.2f} % in scale and strained up to "
                          f"{uncertainty['distortion_strain_pct']:.2f} % against the models: is the scanner's "
@@ -429,10 +440,11 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
 
 
 def _status(U_match: MatchResult, V_match: MatchResult, gates: list) -> tuple[str, list]:
-    reasons = [f"{role} match: {r}" for role, m in (("workpiece", U_match), ("reference", V_match)) for r in m.reasons]
+    reasons = [r.within(f"{role} match", role) for role, m in (("workpiece", U_match), ("reference", V_match))
+               for r in m.reasons]
     numeric_failures = [g for g in gates if not g["passed"] and g["unit"]]
-    reasons += [f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} {g['unit']}"
-                + (f"; {g['why']}" if "why" in g else "") for g in numeric_failures]
+    reasons += [Reason(g["code"], f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} {g['unit']}"
+                       + (f"; {g['why']}" if "why" in g else "")) for g in numeric_failures]
     if FAILED in (U_match.status, V_match.status) or numeric_failures:
         return FAILED, reasons
     if AMBIGUOUS in (U_match.status, V_match.status):

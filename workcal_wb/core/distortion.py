@@ -23,9 +23,11 @@ Whose strain is it?  The reference is the cell's standard (rigid, its model exac
 it shows, its points tell the scanner's.  Along the others (two faces of a block seen do not show its
 scale) only the workpiece can tell, and its strain may be the scanner's or its own: a workpiece differs
 from its model often enough (clay, a casting; a real range scan of the bunny against the model zippered
-from several: 0.3-0.5 %), and that does not move W.  So the workpiece's strain counts, in doubt, unless
-it reads along the reference's strains what the reference does not (OWN_STRAIN): then it is its own.
-Counted as the scanner's, the bunny's refused 4 of 5 scenes whose W was right.
+from several: 0.3-0.5 %), and that does not move W.  So the workpiece's strain there counts only where
+both objects agree that the scan is strained: the reference reads a strain along what it shows and the
+workpiece reads the same there (within OWN_STRAIN).  Otherwise it is taken as the part's own, and the
+calibration warns with the reading and how far it would move W were it the scanner's
+(``shift_if_scanner_mm``): only a reference that shows that strain can tell.
 
 The scale and the strains that keep the volume count only along the directions the points show them
 in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
@@ -105,15 +107,16 @@ def distortion(regions, surfaces, poses, targets: np.ndarray, gates) -> dict:
     ``poses``: U and V (model to scan); ``gates``: how far (mm) a point of each may lie from its model.
     """
     centre = np.mean(np.concatenate(regions), axis=0)
-    total, as_scanned = np.zeros(len(STRAIN_COMPONENTS)), None
+    total, as_scanned, own = np.zeros(len(STRAIN_COMPONENTS)), None, None
     for _ in range(ITERATIONS):
         blocks = [_linearised(points, surface, pose, gate, centre)
                   for points, surface, pose, gate in zip(regions, surfaces, poses, gates)]
         if min(len(residuals) for residuals, _, _ in blocks) < MIN_POINTS:
             break
-        step, own, on_workpiece, weights = _step(blocks)
+        # Whose strain it is, is told on the points as scanned; the steps after it refine that strain.
+        step, own, on_workpiece, weights, not_shown = _step(blocks, own)
         if as_scanned is None:  # what the matches took up, they took up of the points as scanned
-            as_scanned = blocks, weights
+            as_scanned, as_read, unverified = (blocks, weights), on_workpiece, (not_shown if own else 0)
         total += step
         if np.linalg.norm(step) < SETTLED:
             break
@@ -122,36 +125,47 @@ def distortion(regions, surfaces, poses, targets: np.ndarray, gates) -> dict:
                    for points, (residuals, strains, rigid), w in zip(regions, blocks, weights)]
     if as_scanned is None:
         return {"strain": np.zeros((3, 3)), "scale_pct": 0.0, "largest_strain_pct": 0.0, "shift_mm": 0.0,
-                "workpiece_own_pct": 0.0}
-    # What each match's rigid motion takes up of the strain: its weighted least-squares answer to it alone.
-    taken_up = [_rigid(rigid, strains @ total, w) for (_, strains, rigid), w in zip(*as_scanned)]
-    difference = taken_up[0] - taken_up[1]
+                "workpiece_own_pct": 0.0, "shift_if_scanner_mm": 0.0}
     at = frames.apply(poses[0], targets) - centre
-    shift = np.linalg.norm(np.cross(difference[:3], at) + difference[3:], axis=1)
     strain = -_matrix(total)  # the fit found the steps undoing the strain
     return {"strain": strain, "scale_pct": float(100 * np.trace(strain) / 3),
             "largest_strain_pct": float(100 * np.abs(np.linalg.eigvalsh(strain)).max()),
-            "shift_mm": float(shift.max()),
-            "workpiece_own_pct": float(100 * np.linalg.norm(on_workpiece)) if own else 0.0}
+            "shift_mm": _shift(total, *as_scanned, at),
+            "workpiece_own_pct": float(100 * np.linalg.norm(as_read)) if own else 0.0,
+            "shift_if_scanner_mm": _shift(total + unverified, *as_scanned, at) if own else 0.0}
 
 
-def _step(blocks):
-    """(strain step, whether the workpiece's strain is its own, its reading, the points' weights) of one
-    linearisation."""
+def _shift(total: np.ndarray, blocks, weights, at: np.ndarray) -> float:
+    """The largest shift of W at the points ``at`` (about the centre) that the strain ``total`` (STRAIN_BASIS
+    coefficients of the steps undoing it) causes: what each match's rigid motion takes up of it (its
+    weighted least-squares answer to it alone), differenced between the two regions."""
+    taken_up = [_rigid(rigid, strains @ total, w) for (_, strains, rigid), w in zip(blocks, weights)]
+    difference = taken_up[0] - taken_up[1]
+    return float(np.linalg.norm(np.cross(difference[:3], at) + difference[3:], axis=1).max())
+
+
+def _step(blocks, own: bool | None = None):
+    """(strain step, whether the workpiece's strain is its own, its reading, the points' weights, the
+    scan's reading along what the reference does not show) of one linearisation; ``own``: as told
+    before (None: tell it here)."""
     on_reference, shown, reference_weights = _measured(blocks[1:])
     on_workpiece, _, _ = _measured(blocks[:1])
     on_both, _, weights = _measured(blocks)
+    not_shown = on_both - shown @ (shown.T @ on_both)
     # The reference is the cell's standard: along the strains it shows, what it shows is the scanner's.
-    # Along the others only the workpiece can tell, and it may be the scanner or the model: counted, in
-    # doubt, unless the workpiece reads along the reference's strains what the reference does not: then
-    # it differs from its model (a clay, a real range scan), and its strain is its own.
+    # Along the others only the workpiece can tell, and it may be the scanner or the model: counted only
+    # when both objects agree that the scan is strained (the reference reads a strain along what it shows,
+    # and the workpiece the same there); else it differs from its model (a clay, a real range scan), and
+    # its strain is its own.
     # A strain beyond OWN_LIMIT is no part's own, and the reference's reading of it may be cut short (its
     # ends beyond the gates): the whole scan's reading counts.
     if np.linalg.norm(on_workpiece) > OWN_LIMIT:
-        return on_both, False, on_workpiece, weights
-    own = _disagree(on_workpiece, blocks[1:], reference_weights, shown) > OWN_STRAIN
-    step = shown @ (shown.T @ on_reference) + (0 if own else on_both - shown @ (shown.T @ on_both))
-    return step, own, on_workpiece, weights
+        return on_both, False, on_workpiece, weights, not_shown
+    if own is None:
+        own = not (np.linalg.norm(shown.T @ on_reference) > 0
+                   and _disagree(on_workpiece, blocks[1:], reference_weights, shown) <= OWN_STRAIN)
+    step = shown @ (shown.T @ on_reference) + (0 if own else not_shown)
+    return step, own, on_workpiece, weights, not_shown
 
 
 def _matrix(coefficients: np.ndarray) -> np.ndarray:

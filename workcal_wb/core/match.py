@@ -40,7 +40,10 @@ from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
 from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
-from .result import AMBIGUOUS, FAILED, OK, MatchResult
+from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
+                     NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SCAN_NOT_SOLID,
+                     SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, Candidate, MatchResult,
+                     Reason)
 from .stability import gelfand, stability
 from .surface import SurfaceModel
 
@@ -245,15 +248,17 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     pointops.hand_back_freed_heap()  # the whole scan's checks are done: their temporaries would stay resident
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
-                           reasons=[f"{scan.name}: the scan points are {kind}; they cannot fix a pose"])
+                           reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points are {kind}; they cannot "
+                                                           "fix a pose")])
     fine = pointops.random_subset(scan.points, options.max_fine_points, rng)
     medium = pointops.random_subset(fine, MEDIUM_POINTS, rng)
     probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
     noise, patch = (float(np.median(probe_noise)), float(np.median(probe_radius))) if len(probes) else (np.inf, 0.0)
     if not noise <= MAX_SCATTER * patch:
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
-                           reasons=[f"{scan.name}: the points do not lie on a surface (they scatter {noise:.2f} mm "
-                                    f"about local fits {patch:.2f} mm across); a scan samples a surface"])
+                           reasons=[Reason(NOT_A_SURFACE, f"{scan.name}: the points do not lie on a surface (they "
+                                                          f"scatter {noise:.2f} mm about local fits {patch:.2f} mm "
+                                                          "across); a scan samples a surface")])
 
     # A coarse voxel finer than the scan's spacing leaves one point per voxel and features with too
     # few neighbours; the 12th neighbour of a surface point lies about two spacings away, and the
@@ -267,7 +272,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
             starts = _global_candidates(scan.points, surface, voxel, options, rng, min_voxel=1.5 * spacing)
         if not starts:
             return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
-                               reasons=["global search found no consistent pose: the scan may not contain the model"])
+                               reasons=[Reason(NO_POSE, "global search found no consistent pose: the scan may not "
+                                                        "contain the model")])
         gate = voxel / 2  # where the coarse refinement of the global candidates left off
     else:
         starts = [(frames.invert(frames.as_transform(init, "initial guess")), 1.0)]
@@ -520,13 +526,15 @@ def _turns(best, medium: np.ndarray, surface: SurfaceModel, exact_halves: bool =
 
 def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: SurfaceModel, gate: float,
                    fit_limit: float) -> list:
-    """The ``turned`` poses (scan -> model) each refined from TURN_GATE of the model's diagonal (on
-    TURN_POINTS, then on the medium points) and kept when it then explains the scan about as well as
-    the best (TURN_FLOOR of its score on TURN_POINTS at the best's gate, TURN_SIGMAS of its residual
-    scale), distinct from the best and each other (RefineStates).  Judged after they are refined, every
-    time: a turn about an axis a little off (a patch's principal axis, or a model whose legs differ in
-    length) lands a centimetre or more from its home and scores as nothing there, and from the
-    search's ``gate`` it would never slide home.  A best that does not fit the scan (its residual scale above ``fit_limit``, the
+    """The ``turned`` poses (scan -> model) each refined, from the search's ``gate`` where it fits there,
+    else (or when that does not bring it home) from TURN_GATE of the model's diagonal (on TURN_POINTS,
+    then on the medium points), and kept when it then explains the scan about as well as the best
+    (TURN_FLOOR of its score on TURN_POINTS at the best's gate, TURN_SIGMAS of its residual scale),
+    distinct from the best and each other (RefineStates).  Judged after they are refined, every time: a
+    turn about an axis a little off (a patch's principal axis, or a model whose legs differ in length)
+    lands a centimetre or more from its home and scores as nothing there, and from the search's gate
+    it would never slide home; yet from the wide gate a turn that lands home from the search's (a curved
+    tile's flip) may settle elsewhere.  A best that does not fit the scan (its residual scale above ``fit_limit``, the
     verdict's) is no yardstick for that: its turns are refined from the search's gate where they score
     RIVAL_FLOOR of it there (a flip the search handed over comes home so)."""
     points = medium[:TURN_POINTS]
@@ -542,19 +550,29 @@ def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: Surfac
         return _apart_from(best, states, centre)
     starts = global_search.distinct(turned, np.zeros(len(turned)), centre, TURNS_APART[0],
                                     TURNS_APART[1] * surface.diagonal)
-    # First on a few points from the wide gate: a turn that then explains much less than the best cannot
-    # come close to it on more.
-    quick = [coarse_to_fine([medium[:QUICK_TURN_POINTS]], surface, turned[i], TURN_GATE * surface.diagonal,
-                            surface.spacing) for i in starts]
-    scores = inlier_scores(points, surface, [best.T] + [state.T for state in quick],
-                           max([best.gate] + [state.gate for state in quick]))
-    states = _apart_from(best, [coarse_to_fine([points, medium], surface, state.T, state.gate, surface.spacing)
-                                for state, score in zip(quick, scores[1:]) if score >= RIVAL_FLOOR * scores[0]], centre)
-    if not states:
-        return []
-    scores = inlier_scores(points, surface, [best.T] + [state.T for state in states], best.gate)
-    return [state for state, score in zip(states, scores[1:])
-            if score >= TURN_FLOOR * scores[0] and not state.sigma > TURN_SIGMAS * best.sigma]
+    best_score = inlier_scores(points, surface, [best.T], best.gate)[0]
+
+    def as_well(state) -> bool:
+        return (inlier_scores(points, surface, [state.T], best.gate)[0] >= TURN_FLOOR * best_score
+                and not state.sigma > TURN_SIGMAS * best.sigma)
+
+    # A turn that fits at the search's gate is refined from there (it lands home when the part maps onto
+    # itself); one that does not, or does not come home, first on a few points from the wide gate: one that
+    # then explains much less than the best cannot come close to it on more.
+    screened = inlier_scores(points, surface, turned[starts], gate) >= RIVAL_FLOOR * inlier_scores(
+        points, surface, [best.T], gate)[0] if len(starts) else np.zeros(0, bool)
+    states = []
+    for i, fits in zip(starts, screened):
+        state = coarse_to_fine([medium], surface, turned[i], gate, surface.spacing) if fits else None
+        if state is None or not as_well(state):
+            quick = coarse_to_fine([medium[:QUICK_TURN_POINTS]], surface, turned[i], TURN_GATE * surface.diagonal,
+                                   surface.spacing)
+            if inlier_scores(points, surface, [quick.T], max(best.gate, quick.gate))[0] >= RIVAL_FLOOR * \
+                    inlier_scores(points, surface, [best.T], max(best.gate, quick.gate))[0]:
+                state = coarse_to_fine([points, medium], surface, quick.T, quick.gate, surface.spacing)
+        if state is not None and as_well(state):
+            states.append(state)
+    return _apart_from(best, states, centre)
 
 
 def _apart_from(best, states: list, centre: np.ndarray) -> list:
@@ -643,8 +661,8 @@ class Judge:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
     def rank(self, best, rivals, polish, widen, through, turns, finish, home=lambda state, noise: state):
-        """(best state, [{"T", "evidence", "z", "far_z", "other_side", "turn"}, best first]): the poses not
-        equivalent under the model's symmetries, weighed by view evidence.  Every pose is refined again
+        """(best state, [Candidate, best first]): the poses not equivalent under the model's symmetries,
+        weighed by view evidence.  Every pose is refined again
         from a wider gate first (``widen``): a fit can stop an edge's width off, its edge points dropped
         as outliers, and from further out it slides home.  A pose whose evidence is significantly above
         the best's becomes the best (``polish`` finishes it like the best), and a best whose view shows
@@ -704,22 +722,30 @@ class Judge:
                 poses, weighed, turns(poses[0]), lambda t: home(finish(t), self.noise) if fits else finish(t))
         else:
             turned = [False] * len(poses)
-        # "far_z" is weighed only for a result that could be "ok" (weigh_far_off): it costs an exact
+        # The far-off test is weighed only for a result that could be "ok" (weigh_far_off): it costs an exact
         # distance per pose, and a failed result's status and reasons never depend on it.
-        judged = [{"T": poses[0].T, "evidence": weighed[0], "z": 0.0, "far_z": 0.0, "other_side": False,
-                   "turn": False, "fits": self._fits(poses[0])}]
-        for p, e, t in zip(poses[1:], weighed[1:], turned[1:]):
-            judged.append({"T": p.T, "evidence": e, "z": visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR),
-                           "far_z": float("nan"), "other_side": self._from_the_other_side(poses[0].T, p.T), "turn": t,
-                           "fits": self._fits(p)})
-        return poses[0], judged
+        best_T, centre = poses[0].T, self.surface.centre[None]
+        ranked = []
+        for k, (p, e, t) in enumerate(zip(poses, weighed, turned)):
+            ranked.append(Candidate(
+                frames.invert(p.T), score=e.score,
+                score_ratio=float(e.score / weighed[0].score) if weighed[0].score > 0 else 0.0,
+                standard_errors_below_best=visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if k else 0.0,
+                far_off_standard_errors=float("nan") if k else 0.0,
+                from_the_other_side=bool(k) and self._from_the_other_side(best_T, p.T), turn_of_best=t,
+                fits=self._fits(p), hidden_points=e.hidden, missing_cells=e.missing,
+                rotation_from_best_deg=frames.rotation_between_deg(p.T, best_T),
+                shift_from_best_mm=float(np.linalg.norm(frames.apply(frames.invert(p.T), centre)[0]
+                                                        - frames.apply(frames.invert(best_T), centre)[0])),
+                evidence=e))
+        return poses[0], ranked
 
-    def weigh_far_off(self, judged: list) -> None:
-        """Set each rival's "far_z" in a ranking (rank's): its far_off_test against the best."""
-        if len(judged) > 1:  # no rival: no far-off test
-            best_distances = self._distances(judged[0]["T"])
-            for entry in judged[1:]:
-                entry["far_z"] = self._far_off(best_distances, entry["T"])
+    def weigh_far_off(self, ranked: list) -> None:
+        """Set each rival's far_off_standard_errors in a ranking (rank's): its far_off_test against the best."""
+        if len(ranked) > 1:  # no rival: no far-off test
+            best_distances = self._distances(ranked[0].to_model)
+            for candidate in ranked[1:]:
+                candidate.far_off_standard_errors = self._far_off(best_distances, candidate.to_model)
 
     def _fits(self, state) -> bool:
         """Whether a refined pose fits the scan within FAR_OFF_FIT noises: only then are the points it
@@ -1132,129 +1158,182 @@ def _moved(T: np.ndarray, reference: np.ndarray, centre: np.ndarray, gate: float
     return shift > 0.25 * gate or frames.rotation_between_deg(T, reference) > 0.1
 
 
-def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, judged: list, judge: Judge,
+def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, ranked: list, judge: Judge,
              options: MatchOptions, voxel: float, result: dict, timer: PhaseTimer) -> MatchResult:
     """Deviation statistics on the (sub)sampled scan points, stability, the view evidence of the
-    best pose and its rivals, the model's symmetries, and the status with reasons."""
-    T, gate, noise = best.T, best.gate, judge.scan_noise
-    moved = frames.apply(T, sample)
-    _, idx, found = surface.nearest_cell(moved, gate)
-    deviation = surface.plane_residuals(moved[found], idx[found])
-    distance = np.abs(deviation)
-    n_in = int(found.sum())
-    fitness = n_in / len(sample)
-    coverage = _coverage(moved[found], surface, voxel) if n_in else 0.0
-    sigma = MAD_TO_SIGMA * float(np.median(distance)) if n_in else float("inf")
-    stab = best.stability if best.stability is not None else stability(moved[found], surface.normals[idx[found]])
+    best pose and its rivals (``ranked``: Judge.rank's Candidates), the model's symmetries, and the
+    status with its reasons: "failed" for what rules the pose out (_failures), else "ambiguous" for
+    what leaves it in doubt (_doubts), else "ok"."""
+    T = best.T
+    fit = _Fit.of(sample, surface, T, best.gate, voxel)
+    stab = best.stability if best.stability is not None else stability(fit.matched, surface.normals[fit.samples])
     for held in stab.get("held_by_edges", []):
         result["warnings"].append(f"{held['motion']} is held only by the model's edges: the data leave "
                                   f"+/-{held['slack_mm']:.3f} mm of play, the pose is centred in it")
-    view = _view_summary(judged[0]["evidence"], judge)
-    reasons = []
-    if noise > options.tolerance_mm:
-        reasons.append(f"the scan's own noise is {noise:.2f} mm (scatter about local surface fits), more than the "
-                       f"{options.tolerance_mm:g} mm tolerance, so no fit can be checked to {options.tolerance_mm:g} mm "
-                       f"on this scan: give a tolerance of at least {noise:.2f} mm or use a less noisy sensor")
-    if n_in < MIN_SCAN_POINTS or fitness < options.min_fitness:
-        reasons.append(f"only {fitness:.1%} of the scan points lie on the model (at least "
-                       f"{options.min_fitness:.0%} needed): the scan may not contain this model")
-    if coverage < options.min_coverage:
-        reasons.append(f"the matched points cover only {coverage:.1%} of the model surface (at least "
-                       f"{options.min_coverage:.0%} needed)")
-    if sigma > MAX_NOISE_RATIO * noise + options.tolerance_mm:
-        reasons.append(f"the model does not fit the scan within its noise: residual scale {sigma:.2f} mm where "
-                       f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
-                       f"{options.tolerance_mm} mm tolerance): the scan may not contain this model")
-    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
-        view["contradicted_pct"] = 100 * judge.least_contradicted(T)
-    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
-        reasons.append(f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view, from the viewpoint "
-                       f"and from up to {2 * SETTLE_STEP_DEG:g} degrees around it (at most {100 * MAX_CONTRADICTED:.0f} "
-                       f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
-                       "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")
-    status = FAILED if reasons else OK
-    if status == OK:
-        judge.weigh_far_off(judged)
-    listed = _candidates(judged, surface, T)
-    significance = options.rival_significance
-    # A rival is no worse than the best by the view's cells, or better by the points it leaves far off.
-    # The far-off test rules out only a turn of the best refined exactly like it (its flip, tried
-    # always; one significantly better by the view's cells, or as good by them and leaving significantly
-    # fewer points far off, took the best's place, see Judge._with_turns),
-    # and only when both it and the best fit the scan within FAR_OFF_FIT noises: a pose refined less
-    # (or one that does not fit) can leave points far off by being unconverged, and on scans simulated
-    # by ray casting (open3d 0.19) ruling out such a right pose made a flip "ok".
-    fits = sigma <= FAR_OFF_FIT * judge.noise and judged[0]["fits"]
-    rivals = [c for c, entry in zip(listed[1:], judged[1:])
-              if (c["standard_errors_below_best"] < significance
-                  and not (fits and entry["fits"] and c["turn_of_best"] and c["far_off_standard_errors"] >= significance))
-              or c["far_off_standard_errors"] <= -significance or c["from_the_other_side"]
-              or (options.ambiguity_ratio is not None and c["score_ratio"] >= options.ambiguity_ratio)]
-    for c in rivals:
-        c["rival"] = True
-    ties = []
-    symmetries = surface.symmetries()
-    if status == OK and symmetries:
-        reasons.append("the model is symmetric: " + "; ".join(symmetries) + " (in the model's frame): no scan can tell "
-                       "these poses apart, U is one of them")
-    other_side = [c for c in rivals if c["from_the_other_side"]]
-    if status == OK and other_side:
-        reasons.append(f"{len(other_side)} pose(s) put about as many scan points on the model seen from the other side "
-                       f"of it (the closest {other_side[0]['rotation_from_best_deg']:.1f} deg away): which side of the "
-                       "part the scan shows cannot be told without the scanner's position (give it as viewpoint)")
-        ties.append(reasons[-1])
-    rivals = [c for c in rivals if not c["from_the_other_side"]]
-    if status == OK and rivals:
-        r = min(rivals, key=lambda c: c["standard_errors_below_best"])
-        reasons.append(f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
-                       f"{r['rotation_from_best_deg']:.1f} deg away, scores {r['score_ratio']:.0%} of the best, only "
-                       f"{r['standard_errors_below_best']:.1f} standard errors below it ({view['cells']} view cells, "
-                       f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}: the part may be "
-                       "nearly symmetric; see candidates")
-        ties.append(reasons[-1])
-    if status == OK and view.get("off_pct", 0.0) > 100 * MAX_OFF:
-        reasons.append(f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
-                       f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
-                       "the scan unexplained")
-    # Walls under two sample spacings are not resolved by the sampled model: only look for thinner ones.
-    resolved = THIN_WALL_NOISES * judge.noise > 2 * surface.spacing
-    thickness = judge.wall_thickness(T, judged[0]["evidence"]) if status == OK and resolved else float("inf")
-    if thickness < THIN_WALL_NOISES * judge.noise:
-        reasons.append(f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
-                       f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
-                       "cannot be told apart")
-    if status == OK and view.get("continued_pct", 0.0) > 100 * MAX_CONTINUED:
-        reasons.append(f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
-                       f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
-                       "or something lies flush with the part there")
-    continued = judge.continued_faces(T) if status == OK else 0
-    if continued >= MIN_CONTINUED_POINTS and continued > MAX_CONTINUED_POINTS * len(judge.all_points):
-        reasons.append(f"{continued} scan points ({continued / len(judge.all_points):.0%}) lie off the placed model in "
-                       "the plane of a face of it that they run on from: the scanned face goes on past the model's "
-                       "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
-                       "flush with the part)")
-    depth = _depth_through_support(judge.support, surface, T) if status == OK else 0.0
-    if depth > SUPPORT_TOLERANCES * options.tolerance_mm:
-        reasons.append(f"the placed model reaches {depth:.1f} mm through the plane the rest of the scan stands on "
-                       f"(at most {SUPPORT_TOLERANCES:g} times the tolerance): a part cannot be inside the table "
-                       "it stands on, so the pose may be slid or turned (or the part stands in a pocket below "
-                       "that plane)")
-    if status == OK and not stab["constrained"]:
-        reasons.append("the matched surface does not fix every motion (under-constrained): free "
-                       + "; ".join(stab["free_motions"]))
-    if reasons and status == OK:
-        status = AMBIGUOUS
+    view = _view_summary(ranked[0].evidence, judge)
+    failures = _failures(fit, judge, view, options, T)
+    if not failures:
+        judge.weigh_far_off(ranked)
+    _mark_rivals(ranked, fit.sigma <= FAR_OFF_FIT * judge.noise, options)
+    doubts = [] if failures else _doubts(ranked, surface, judge, view, stab, options, T)
+    status = FAILED if failures else AMBIGUOUS if doubts else OK
+    n_in, distance = len(fit.distance), fit.distance
     percentiles = {str(q): float(np.percentile(distance, q)) for q in (50, 90, 95, 99)} if n_in else {}
     return MatchResult(
-        status, matrix=frames.invert(T), fitness=fitness, coverage=coverage,
-        rms_mm=float(np.sqrt(np.mean(deviation**2))) if n_in else float("nan"),
+        status, matrix=frames.invert(T), fitness=fit.fitness, coverage=fit.coverage,
+        rms_mm=float(np.sqrt(np.mean(fit.deviation**2))) if n_in else float("nan"),
         mean_directed_hausdorff_mm=float(distance.mean()) if n_in else float("nan"),
         max_deviation_mm=float(distance.max()) if n_in else float("nan"),
         percentiles_mm=percentiles,
         within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
-        gate_mm=float(gate), n_inliers=int(round(fitness * len(scan))), iterations=int(best.iterations),
-        time_s=timer.total(), stability=stab, candidates=listed, reasons=reasons, noise_mm=float(noise),
-        viewpoint=judge.viewpoint_info(), view=view, symmetries=_symmetry_list(surface), ties=ties, **result)
+        gate_mm=float(best.gate), n_inliers=int(round(fit.fitness * len(scan))), iterations=int(best.iterations),
+        time_s=timer.total(), stability=stab, candidates=ranked, reasons=failures + doubts,
+        noise_mm=float(judge.scan_noise), viewpoint=judge.viewpoint_info(), view=view,
+        symmetries=_symmetry_list(surface), ties=[r for r in doubts if r.code in (OTHER_SIDE, RIVAL)], **result)
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """How the placed model fits the verdict's scan points: the residuals of those within the gate (and
+    which model samples they lie on), their share of the points, the model's coverage, the residual scale."""
+
+    matched: np.ndarray  # the points within the gate, in the model's frame
+    samples: np.ndarray  # the nearest model sample of each
+    deviation: np.ndarray  # signed point-to-plane residuals (mm)
+    fitness: float
+    coverage: float
+    sigma: float
+
+    @property
+    def distance(self) -> np.ndarray:
+        return np.abs(self.deviation)
+
+    @classmethod
+    def of(cls, sample: np.ndarray, surface: SurfaceModel, T: np.ndarray, gate: float, voxel: float) -> "_Fit":
+        moved = frames.apply(T, sample)
+        _, idx, found = surface.nearest_cell(moved, gate)
+        deviation = surface.plane_residuals(moved[found], idx[found])
+        n_in = int(found.sum())
+        return cls(moved[found], idx[found], deviation, n_in / len(sample),
+                   _coverage(moved[found], surface, voxel) if n_in else 0.0,
+                   MAD_TO_SIGMA * float(np.median(np.abs(deviation))) if n_in else float("inf"))
+
+
+def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.ndarray) -> list:
+    """The Reasons that fail a pose: a scan noisier than the tolerance, too few points on the model or too
+    little of it covered, a fit outside the noise, a view largely contradicted (from around the viewpoint
+    too, an estimated one being rough)."""
+    noise, tolerance = judge.scan_noise, options.tolerance_mm
+    reasons = []
+    if noise > tolerance:
+        reasons.append(Reason(NOISE_ABOVE_TOLERANCE, (
+            f"the scan's own noise is {noise:.2f} mm (scatter about local surface fits), more than the "
+            f"{tolerance:g} mm tolerance, so no fit can be checked to {tolerance:g} mm "
+            f"on this scan: give a tolerance of at least {noise:.2f} mm or use a less noisy sensor")))
+    if len(fit.deviation) < MIN_SCAN_POINTS or fit.fitness < options.min_fitness:
+        reasons.append(Reason(FEW_POINTS, f"only {fit.fitness:.1%} of the scan points lie on the model (at least "
+                                          f"{options.min_fitness:.0%} needed): the scan may not contain this model"))
+    if fit.coverage < options.min_coverage:
+        reasons.append(Reason(LOW_COVERAGE, f"the matched points cover only {fit.coverage:.1%} of the model surface "
+                                            f"(at least {options.min_coverage:.0%} needed)"))
+    if fit.sigma > MAX_NOISE_RATIO * noise + tolerance:
+        reasons.append(Reason(MISFIT, (
+            f"the model does not fit the scan within its noise: residual scale {fit.sigma:.2f} mm where "
+            f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
+            f"{tolerance} mm tolerance): the scan may not contain this model")))
+    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+        view["contradicted_pct"] = 100 * judge.least_contradicted(T)
+    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+        reasons.append(Reason(VIEW_CONTRADICTED, (
+            f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view, from the viewpoint "
+            f"and from up to {2 * SETTLE_STEP_DEG:g} degrees around it (at most {100 * MAX_CONTRADICTED:.0f} "
+            f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
+            "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")))
+    return reasons
+
+
+def _mark_rivals(ranked: list, best_fits: bool, options: MatchOptions) -> None:
+    """Mark the Candidates after the best that are rivals: no worse than the best by the view's cells, or
+    better by the points they leave far off, or seen from the other side (or scoring ``ambiguity_ratio``
+    of the best).  The far-off test rules out only a turn of the best refined exactly like it (its flip,
+    tried always; one significantly better by the view's cells, or as good by them and leaving
+    significantly fewer points far off, took the best's place, see Judge._with_turns), and only when both
+    it and the best fit the scan within FAR_OFF_FIT noises (``best_fits``, on the verdict's points and on
+    the fine ones): a pose refined less (or one that does not fit) can leave points far off by being
+    unconverged, and on scans simulated by ray casting (open3d 0.19) ruling out such a right pose made a
+    flip "ok"."""
+    significance = options.rival_significance
+    fits = best_fits and ranked[0].fits
+    for c in ranked[1:]:
+        ruled_out_far_off = fits and c.fits and c.turn_of_best and c.far_off_standard_errors >= significance
+        c.rival = bool((c.standard_errors_below_best < significance and not ruled_out_far_off)
+                       or c.far_off_standard_errors <= -significance or c.from_the_other_side
+                       or (options.ambiguity_ratio is not None and c.score_ratio >= options.ambiguity_ratio))
+
+
+def _doubts(ranked: list, surface: SurfaceModel, judge: Judge, view: dict, stab: dict, options: MatchOptions,
+            T: np.ndarray) -> list:
+    """The Reasons that leave a pose that fits in doubt: the model's symmetries, rivals (seen from the
+    other side, or clearly different), view behind the placed surface, a wall too thin for the noise, the
+    scanned surface going on past the outline or a face, the model reaching through the table, a motion
+    the surface leaves free."""
+    reasons = []
+    symmetries = surface.symmetries()
+    if symmetries:
+        reasons.append(Reason(SYMMETRIC, "the model is symmetric: " + "; ".join(symmetries) + " (in the model's "
+                                         "frame): no scan can tell these poses apart, U is one of them"))
+    rivals = [c for c in ranked[1:] if c.rival]
+    other_side = [c for c in rivals if c.from_the_other_side]
+    if other_side:
+        reasons.append(Reason(OTHER_SIDE, (
+            f"{len(other_side)} pose(s) put about as many scan points on the model seen from the other side "
+            f"of it (the closest {other_side[0].rotation_from_best_deg:.1f} deg away): which side of the "
+            "part the scan shows cannot be told without the scanner's position (give it as viewpoint)")))
+    rivals = [c for c in rivals if not c.from_the_other_side]
+    if rivals:
+        r = min(rivals, key=lambda c: c.standard_errors_below_best)
+        reasons.append(Reason(RIVAL, (
+            f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
+            f"{r.rotation_from_best_deg:.1f} deg away, scores {r.score_ratio:.0%} of the best, only "
+            f"{r.standard_errors_below_best:.1f} standard errors below it ({view['cells']} view cells, "
+            f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}: the part may be "
+            "nearly symmetric; see candidates")))
+    if view.get("off_pct", 0.0) > 100 * MAX_OFF:
+        reasons.append(Reason(BEHIND_SURFACE, (
+            f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
+            f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
+            "the scan unexplained")))
+    # Walls under two sample spacings are not resolved by the sampled model: only look for thinner ones.
+    resolved = THIN_WALL_NOISES * judge.noise > 2 * surface.spacing
+    thickness = judge.wall_thickness(T, ranked[0].evidence) if resolved else float("inf")
+    if thickness < THIN_WALL_NOISES * judge.noise:
+        reasons.append(Reason(THIN_WALL, (
+            f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
+            f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
+            "cannot be told apart")))
+    if view.get("continued_pct", 0.0) > 100 * MAX_CONTINUED:
+        reasons.append(Reason(OUTLINE_CONTINUED, (
+            f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
+            f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
+            "or something lies flush with the part there")))
+    continued = judge.continued_faces(T)
+    if continued >= MIN_CONTINUED_POINTS and continued > MAX_CONTINUED_POINTS * len(judge.all_points):
+        reasons.append(Reason(FACE_CONTINUED, (
+            f"{continued} scan points ({continued / len(judge.all_points):.0%}) lie off the placed model in "
+            "the plane of a face of it that they run on from: the scanned face goes on past the model's "
+            "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
+            "flush with the part)")))
+    depth = _depth_through_support(judge.support, surface, T)
+    if depth > SUPPORT_TOLERANCES * options.tolerance_mm:
+        reasons.append(Reason(THROUGH_SUPPORT, (
+            f"the placed model reaches {depth:.1f} mm through the plane the rest of the scan stands on "
+            f"(at most {SUPPORT_TOLERANCES:g} times the tolerance): a part cannot be inside the table "
+            "it stands on, so the pose may be slid or turned (or the part stands in a pocket below "
+            "that plane)")))
+    if not stab["constrained"]:
+        reasons.append(Reason(UNDER_CONSTRAINED, "the matched surface does not fix every motion (under-constrained): "
+                                                 "free " + "; ".join(stab["free_motions"])))
+    return reasons
 
 
 @dataclass(frozen=True)
@@ -1290,31 +1369,11 @@ def _depth_through_support(support: Support | None, surface: SurfaceModel, T: np
     return float(max(0.0, -((placed - support.centre) @ support.normal).min()))
 
 
-def _far_off_words(candidate: dict) -> str:
+def _far_off_words(candidate: Candidate) -> str:
     """How a rival fares by the scan points it leaves far off, for its reason."""
-    far = candidate["far_off_standard_errors"]
+    far = candidate.far_off_standard_errors
     return f", and {far:.1f} by the scan points it leaves far off the part" if far > -1 else (
         f", and {-far:.1f} above it by the scan points it leaves far off the part")
-
-
-def _candidates(judged: list, surface: SurfaceModel, T: np.ndarray) -> list:
-    """The poses weighed, best first, as the result lists them (U of each and how it compares)."""
-    best_score = judged[0]["evidence"].score
-    centre = surface.centre
-    listed = []
-    for entry in judged:
-        Tc, evidence = entry["T"], entry["evidence"]
-        listed.append({"matrix": frames.invert(Tc).tolist(), "score": evidence.score,
-                       "score_ratio": float(evidence.score / best_score) if best_score > 0 else 0.0,
-                       "standard_errors_below_best": float(entry["z"]),
-                       "far_off_standard_errors": float(entry["far_z"]),
-                       "from_the_other_side": entry["other_side"], "turn_of_best": entry["turn"],
-                       "hidden_points": evidence.hidden, "missing_cells": evidence.missing,
-                       "rotation_from_best_deg": frames.rotation_between_deg(Tc, T),
-                       "shift_from_best_mm": float(np.linalg.norm(
-                           frames.apply(frames.invert(Tc), centre[None])[0]
-                           - frames.apply(frames.invert(T), centre[None])[0]))})
-    return listed
 
 
 def _view_summary(evidence: visibility.Evidence, judge: Judge) -> dict:

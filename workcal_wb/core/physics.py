@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import frames, visibility
-from .result import AMBIGUOUS, FAILED, OK, MatchResult
+from .result import AMBIGUOUS, FAILED, MANY_WAYS, OK, SINKS, TIE_UNBROKEN, MatchResult, Reason
 from .surface import SurfaceModel
 
 # A pose stands on the platform when its lowest point lies within this many platform bands (the plane's
@@ -124,14 +124,15 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
     if match.matrix is None or match.status == FAILED:
         return match
     viewpoint = (match.viewpoint or {}).get("position_mm")
-    poses = [np.asarray(match.matrix)] + [np.asarray(c["matrix"]) for c in match.candidates[1:] if c.get("rival")]
+    poses = [np.asarray(match.matrix)] + [c.matrix for c in match.candidates[1:] if c.rival]
     # Free space only weighs poses against each other: a match without rivals needs only the platform.
     checks = [_check(surface, scene, U, viewpoint, free=len(poses) > 1) for U in poses]
     possible = [i for i, c in enumerate(checks) if not c["sinks"]]
     if not possible:
         match.status = FAILED
-        match.reasons.append(f"the placed {role} model sinks {-checks[0]['height']:.1f} mm through the platform "
-                             "in every pose that fits: the platform or the model is not the one in the scan")
+        match.reasons.append(Reason(SINKS, f"the placed {role} model sinks {-checks[0]['height']:.1f} mm through the "
+                                           "platform in every pose that fits: the platform or the model is not the "
+                                           "one in the scan"))
         return match
     best = _cleanest(checks, possible)
     if best != 0 and refit is not None:  # the best breaks a constraint a rival keeps: the rival it is
@@ -146,31 +147,33 @@ def decide(match: MatchResult, surface: SurfaceModel, scene: Scene, role: str, r
             return replaced
     rivals = [i for i in range(1, len(poses))]
     survivors = []
-    listed = [c for c in match.candidates[1:] if c.get("rival")]
+    listed = [c for c in match.candidates[1:] if c.rival]
     for i in rivals:
         why = _ruled_out(checks[i], checks[0], scene)
         if why is None:
             survivors.append(i)
             continue
-        listed[i - 1]["ruled_out_by"] = why[0]
+        listed[i - 1].ruled_out_by = why[0]
         match.constraints.append(f"a rival pose {frames.rotation_between_deg(poses[0], poses[i]):.1f} deg away was "
                                  f"ruled out by {why[0]}: {why[1]}")
     if rivals and not survivors and match.ties:
         if len(rivals) > MAX_RULED_OUT:
-            match.reasons.append(f"the view fits the {role} in {len(rivals) + 1} ways; the platform and free space "
-                                 f"rule out the {len(rivals)} the search listed, but a view that fits it in so many "
-                                 "ways may fit it in others the search did not list: scan again from where the part "
-                                 "shows more of its shape, or give the regions")
+            match.reasons.append(Reason(MANY_WAYS, (
+                f"the view fits the {role} in {len(rivals) + 1} ways; the platform and free space "
+                f"rule out the {len(rivals)} the search listed, but a view that fits it in so many "
+                "ways may fit it in others the search did not list: scan again from where the part "
+                "shows more of its shape, or give the regions")))
         else:
             match.reasons = [r for r in match.reasons if r not in match.ties]
             match.ties = []
             if not match.reasons and match.status == AMBIGUOUS:
                 match.status = OK
     elif survivors and match.ties:
-        match.reasons.append(_what_would_break(surface, poses[0], poses[survivors[0]], role))
+        match.reasons.append(Reason(TIE_UNBROKEN, _what_would_break(surface, poses[0], poses[survivors[0]], role)))
     if checks[0]["sinks"] and match.status == OK:
         match.status = FAILED
-        match.reasons.append(f"the placed {role} model sinks {-checks[0]['height']:.1f} mm through the platform")
+        match.reasons.append(Reason(SINKS, f"the placed {role} model sinks {-checks[0]['height']:.1f} mm through the "
+                                           "platform"))
     return match
 
 

@@ -20,7 +20,8 @@ from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
 from .match import MatchOptions, match
-from .result import AMBIGUOUS, FAILED, OK, MatchResult
+from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
+                     Reason)
 from .surface import GATE_CELLS, SurfaceModel
 
 # The platform must hold at least this fraction of the scan to count as one (a dark table returns few
@@ -168,10 +169,10 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
         left = _unexplained(objects, labels, workpiece_idx, reference_idx)
         if left > UNEXPLAINED_SHARE * len(reference_idx) and reference_match.status == OK:
             reference_match.status = AMBIGUOUS
-            reference_match.reasons.append(
+            reference_match.reasons.append(Reason(SPLIT_UNEXPLAINED, (
                 f"{left} points of the objects that touch lie on neither placed model (more than "
                 f"{UNEXPLAINED_SHARE:.0%} of the reference's {len(reference_idx)}): the models may split them wrongly "
-                "(a pose that fits part of the reference); scan the objects apart, or give the regions")
+                "(a pose that fits part of the reference); scan the objects apart, or give the regions")))
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform,
                    {role: found[role][3] for role in ("workpiece", "reference")}, spacing)
 
@@ -282,10 +283,11 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
             turned_deg = frames.rotation_between_deg(again.matrix, found.matrix)
             shift_mm = float(np.linalg.norm(frames.apply(again.matrix, surface.centre)
                                             - frames.apply(found.matrix, surface.centre)))
-            reasons = [f"this pose was refined from a first pose {turned_deg:.0f} deg and {shift_mm:.0f} mm away whose "
-                       f"search was in doubt [{'; '.join(found.reasons)}], and the points it was fitted to were "
-                       "picked with that first pose, so the doubt stands: check the pose in the 3D view, or scan "
-                       "the objects apart or give the regions"]
+            reasons = [Reason(SEARCH_DOUBT, (
+                f"this pose was refined from a first pose {turned_deg:.0f} deg and {shift_mm:.0f} mm away whose "
+                f"search was in doubt [{'; '.join(map(str, found.reasons))}], and the points it was fitted to were "
+                "picked with that first pose, so the doubt stands: check the pose in the 3D view, or scan "
+                "the objects apart or give the regions"))]
         again.status, again.reasons, again.candidates, again.ties = AMBIGUOUS, reasons, found.candidates, found.ties
     again.timings_s = {**{f"locate {k}": v for k, v in found.timings_s.items()}, **again.timings_s}
     again.time_s += found.time_s
@@ -310,7 +312,7 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
         # searches settle either way).
         again = best is not None and result.matrix is not None and any(
             _same_matrix(result.matrix, np.asarray(U), surface)
-            for U in [best.matrix] + [c["matrix"] for c in best.candidates[1:]] if U is not None)
+            for U in [best.matrix] + [c.matrix for c in best.candidates[1:]] if U is not None)
         if best is None or rank(result) > rank(best):
             best = result
         if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
@@ -604,7 +606,7 @@ def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, toleran
     """Why no object matched the model, as far as the objects' sizes, the best rejected match and
     poses through the platform tell."""
     if rejected is not None and rejected.noise_mm > tolerance_mm:
-        said = [r for r in rejected.reasons if "own noise" in r]
+        said = [str(r) for r in rejected.reasons if r.code == NOISE_ABOVE_TOLERANCE]
         return f"the tolerance {tolerance_mm:g} mm is below the scan's noise: " + (said[0] if said else
                                                                                   f"{rejected.noise_mm:.2f} mm")
     if rejected is not None and rejected.fitness >= MIN_FITNESS[role]:

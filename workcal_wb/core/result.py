@@ -16,7 +16,7 @@ import io
 import json
 import math
 import zipfile
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +27,8 @@ from .files import read_bytes
 
 OK, AMBIGUOUS, FAILED = "ok", "ambiguous", "failed"
 STATUSES = (OK, AMBIGUOUS, FAILED)
-CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 2  # version 2: region indices in a side file
+# Version 2: region indices in a side file; 3: each reason a code with its sentence.
+CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 3
 REGION_ROLES = ("workpiece", "reference", "platform")  # the regions that are scan point indices
 REGIONS_SUFFIX = ".regions.npz"
 _REGION_FILE_KEYS = ("counts", "indices_file")  # what result.json says of the side file
@@ -48,6 +49,138 @@ def _jsonable(value):
 
 def _matrix(value, name):
     return None if value is None else frames.as_transform(value, name)
+
+
+# --- why a result is not "ok" -------------------------------------------------------------------
+
+# The codes of Reason, stable across versions (decisions and tests compare them; the sentences may change).
+# A match:
+SCAN_NOT_SOLID = "scan_not_solid"  # the scan points lie on a line or a plane, or are too few
+NOT_A_SURFACE = "not_a_surface"  # they scatter like a volume
+NO_POSE = "no_pose"  # the global search found no consistent pose
+NOISE_ABOVE_TOLERANCE = "noise_above_tolerance"  # the scan's own noise exceeds the tolerance
+FEW_POINTS = "few_points"  # too few scan points on the model
+LOW_COVERAGE = "low_coverage"  # the matched points cover too little of the model
+MISFIT = "misfit"  # the model does not fit the scan within its noise
+VIEW_CONTRADICTED = "view_contradicted"  # the placed model contradicts much of the view
+SYMMETRIC = "symmetric"  # the model is symmetric
+OTHER_SIDE = "other_side"  # a pose seen from the other side fits about as well
+RIVAL = "rival"  # a clearly different pose explains the view about as well
+BEHIND_SURFACE = "behind_surface"  # much of the view inside the outline lies behind the placed surface
+THIN_WALL = "thin_wall"  # the wall seen is too thin for the noise
+OUTLINE_CONTINUED = "outline_continued"  # the scanned surface goes on past the placed outline
+FACE_CONTINUED = "face_continued"  # scan points run on in the plane of a face past its edge
+THROUGH_SUPPORT = "through_support"  # the placed model reaches through the plane the scan stands on
+UNDER_CONSTRAINED = "under_constrained"  # a motion the matched surface does not fix
+# Weighing a match by the scene (physics, regions, surroundings):
+SINKS = "sinks"  # the placed model sinks through the platform
+MANY_WAYS = "many_ways"  # the view fits the object in more ways than the constraints can weigh
+TIE_UNBROKEN = "tie_unbroken"  # nothing in the scene tells the poses apart
+SPLIT_UNEXPLAINED = "split_unexplained"  # touching objects split leaving much on neither model
+SEARCH_DOUBT = "search_doubt"  # refined from a first pose whose search was in doubt
+# A calibration (and its quality gates' codes, also <role>_status, <role>_rms, <role>_within_tolerance and
+# <role>_explained for "workpiece" and "reference"):
+NOT_FOUND = "not_found"  # an object the scan does not show (or its model is not the one scanned)
+UNCERTAINTY = "uncertainty"  # the uncertainty bound exceeds the tolerance
+DISTORTION = "distortion"  # the scan's distortion moves W more than the uncertainty leaves of the tolerance
+ERROR = "error"  # an input the calibration could not use (the message names it)
+UNKNOWN = "unknown"  # a reason read from a file written before reasons had codes
+
+
+@dataclass(frozen=True)
+class Reason:
+    """Why a result is not "ok": a stable ``code`` (the module's constants above) that decisions and
+    tests compare, the sentence people read (``str(reason)``), and the object it is about when it is
+    said of a whole (a calibration's "reference match: ...")."""
+
+    code: str
+    text: str
+    subject: str = ""
+
+    def __str__(self) -> str:
+        return self.text
+
+    def within(self, words: str, subject: str = "") -> "Reason":
+        """The same reason said within a whole, after ``words`` ("reference match", "with the scan beside
+        its region"), of ``subject`` when it is one object's ("reference")."""
+        return Reason(self.code, f"{words}: {self.text}", subject or self.subject)
+
+    def to_dict(self) -> dict:
+        return {"code": self.code, "text": self.text, **({"subject": self.subject} if self.subject else {})}
+
+    @classmethod
+    def from_value(cls, value, source: str, name: str) -> "Reason":
+        """A reason as a file gives it: {"code", "text"[, "subject"]}, or a bare sentence (UNKNOWN code)."""
+        if isinstance(value, cls):
+            return value
+        if _is(value, _TEXT):
+            return cls(UNKNOWN, value)
+        if (isinstance(value, dict) and _is(value.get("code"), _TEXT) and _is(value.get("text"), _TEXT)
+                and _is(value.get("subject", ""), _TEXT)):
+            return cls(value["code"], value["text"], value.get("subject", ""))
+        raise InputError(f"{source}: every entry of {name} must be a reason (an object with code and text) or a "
+                         f"string, found {_json_kind(value)}")
+
+
+def codes(reasons) -> list[str]:
+    """The codes of ``reasons`` in order."""
+    return [r.code for r in reasons]
+
+
+@dataclass
+class Candidate:
+    """A pose a match weighed, as its result lists it (the best first): U (model -> scan) and how it
+    compares with the best by the view evidence and by the scan points it leaves far off, whether it
+    is a turn of the best refined like it, fits the scan within the noise, is a rival, or was ruled out
+    by a physical constraint.  ``evidence`` (visibility.Evidence) is kept while the match judges it."""
+
+    matrix: np.ndarray
+    score: float = 0.0
+    score_ratio: float = 1.0
+    standard_errors_below_best: float = 0.0
+    far_off_standard_errors: float = 0.0  # NaN where not weighed (a result that could not be "ok")
+    from_the_other_side: bool = False
+    turn_of_best: bool = False
+    fits: bool = True
+    hidden_points: int = 0
+    missing_cells: int = 0
+    rotation_from_best_deg: float = 0.0
+    shift_from_best_mm: float = 0.0
+    rival: bool = False
+    ruled_out_by: str | None = None
+    evidence: object = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        self.matrix = frames.as_transform(self.matrix, "candidate matrix")
+
+    @property
+    def to_model(self) -> np.ndarray:
+        """T = U^-1: scan -> model."""
+        return frames.invert(self.matrix)
+
+    def __eq__(self, other) -> bool:  # as listed: a matrix by its elements, NaN (not weighed) equal to NaN
+        return isinstance(other, Candidate) and json.dumps(self.to_dict()) == json.dumps(other.to_dict())
+
+    def to_dict(self) -> dict:
+        return _jsonable({f.name: getattr(self, f.name) for f in fields(self) if f.name != "evidence"})
+
+    @classmethod
+    def from_dict(cls, data, source: str) -> "Candidate":
+        values = _checked_fields(cls, data, source)
+        for name in ("score", "score_ratio", "standard_errors_below_best", "far_off_standard_errors",
+                     "rotation_from_best_deg", "shift_from_best_mm", "hidden_points", "missing_cells"):
+            if name in values and not _is(values[name], _NUMBER):
+                raise InputError(f"{source}: {name} must be a number, found {_json_kind(values[name])}")
+        for name in ("from_the_other_side", "turn_of_best", "fits", "rival"):
+            if name in values and not isinstance(values[name], bool):
+                raise InputError(f"{source}: {name} must be true or false, found {_json_kind(values[name])}")
+        if values.get("ruled_out_by") is not None and not _is(values["ruled_out_by"], _TEXT):
+            raise InputError(f"{source}: ruled_out_by must be a string or null")
+        values.pop("evidence", None)
+        try:
+            return cls(**values)
+        except (TypeError, ValueError, InputError) as exc:
+            raise InputError(f"{source}: {exc}") from None
 
 
 # --- checking what a file says ------------------------------------------------------------------
@@ -109,8 +242,8 @@ def _check_gates(gates: list, source: str) -> None:
         for key in ("value", "limit"):
             if key in gate and not _is(gate[key], _NUMBER + _TEXT):
                 raise InputError(f"{source}: quality gate {gate.get('name')!r}: {key} must be a number or a string")
-        if not _is(gate.get("why", ""), _TEXT):
-            raise InputError(f"{source}: quality gate {gate.get('name')!r}: why must be a string")
+        if not _is(gate.get("why", ""), _TEXT) or not _is(gate.get("code", ""), _TEXT):
+            raise InputError(f"{source}: quality gate {gate.get('name')!r}: why and code must be strings")
 
 
 @dataclass
@@ -137,28 +270,35 @@ class MatchResult:
     time_s: float = 0.0
     timings_s: dict = field(default_factory=dict)  # wall time per phase
     stability: dict = field(default_factory=dict)
-    candidates: list = field(default_factory=list)  # poses weighed, best first, distinct under the model's symmetries
+    candidates: list = field(default_factory=list)  # Candidates weighed, best first, distinct under the model's symmetries
     warnings: list = field(default_factory=list)
-    reasons: list = field(default_factory=list)
+    reasons: list = field(default_factory=list)  # Reasons
     seed: int = 0
     noise_mm: float = float("nan")  # the scan's own noise (scatter about local surface fits)
     viewpoint: dict = field(default_factory=dict)  # the sensor position the view was judged from, and its source
     view: dict = field(default_factory=dict)  # the best pose's view evidence: cells, hidden points, missing cells
     symmetries: list = field(default_factory=list)  # the model's own: axis, point_mm, order (0: any angle), description
-    ties: list = field(default_factory=list)  # the reasons that come from rival poses (physics.decide may break them)
+    ties: list = field(default_factory=list)  # the Reasons that come from rival poses (physics.decide may break them)
     constraints: list = field(default_factory=list)  # poses ruled out by contact with the platform or free space
 
     def __post_init__(self):
         if self.status not in STATUSES:
             raise ValueError(f"match status must be one of {STATUSES}, not {self.status!r}")
         self.matrix = _matrix(self.matrix, "match matrix")
+        self.reasons = [Reason.from_value(r, "match", "reasons") for r in self.reasons]
+        self.ties = [Reason.from_value(r, "match", "ties") for r in self.ties]
+        self.candidates = [c if isinstance(c, Candidate) else Candidate.from_dict(c, "match candidate")
+                           for c in self.candidates]
 
     @property
     def ok(self) -> bool:
         return self.status == OK
 
     def to_dict(self) -> dict:
-        out = _jsonable(asdict(self))
+        out = _jsonable({f.name: getattr(self, f.name) for f in fields(self)
+                         if f.name not in ("candidates", "reasons", "ties")})
+        out["candidates"] = [c.to_dict() for c in self.candidates]
+        out["reasons"], out["ties"] = [r.to_dict() for r in self.reasons], [r.to_dict() for r in self.ties]
         if self.matrix is not None:
             out["inverse"] = frames.invert(self.matrix).tolist()
             out.update({k: v for k, v in frames.describe(self.matrix).items() if k != "matrix"})
@@ -170,9 +310,13 @@ class MatchResult:
         values = _checked_fields(cls, data, source)
         for name in ("percentiles_mm", "timings_s"):
             _check_numbers(values.get(name, {}), source, name)
-        for name in ("warnings", "reasons", "ties", "constraints"):
+        for name in ("warnings", "constraints"):
             _check_items(values.get(name, []), _TEXT, source, name)
+        for name in ("reasons", "ties"):
+            values[name] = [Reason.from_value(r, source, name) for r in values.get(name, [])]
         _check_items(values.get("candidates", []), (dict,), source, "candidates")
+        values["candidates"] = [Candidate.from_dict(c, f"{source}: candidate {k}")
+                                for k, c in enumerate(values.get("candidates", []))]
         try:
             return cls(**values)
         except (TypeError, ValueError) as exc:
@@ -211,13 +355,14 @@ class CalibrationResult:
     inputs: dict = field(default_factory=dict)
     regions: dict = field(default_factory=dict)  # scan point indices per role and how they were found
     warnings: list = field(default_factory=list)
-    reasons: list = field(default_factory=list)
+    reasons: list = field(default_factory=list)  # Reasons
     time_s: float = 0.0
     seed: int = 0
 
     def __post_init__(self):
         if self.status not in STATUSES:
             raise ValueError(f"calibration status must be one of {STATUSES}, not {self.status!r}")
+        self.reasons = [Reason.from_value(r, "calibration", "reasons") for r in self.reasons]
         self.W, self.U, self.V = (_matrix(m, n) for m, n in ((self.W, "W"), (self.U, "U"), (self.V, "V")))
         if isinstance(self.workpiece, dict):
             self.workpiece = MatchResult.from_dict(self.workpiece, "workpiece match")
@@ -263,6 +408,7 @@ class CalibrationResult:
         for f in fields(self):
             value = getattr(self, f.name)
             out[f.name] = value.to_dict() if isinstance(value, MatchResult) else _jsonable(value)
+        out["reasons"] = [r.to_dict() for r in self.reasons]
         roles = {k: v for k, v in self.regions.items() if k in REGION_ROLES and v is not None}
         out["regions"] = {k: v for k, v in out["regions"].items() if k not in _REGION_FILE_KEYS + REGION_ROLES}
         if region_indices:
@@ -290,8 +436,8 @@ class CalibrationResult:
         values = _checked_fields(cls, data, source)
         _check_numbers(values.get("uncertainty", {}), source, "uncertainty",
                        lambda key: key.endswith(("_mm", "_deg", "_pct")))
-        for name in ("warnings", "reasons"):
-            _check_items(values.get(name, []), _TEXT, source, name)
+        _check_items(values.get("warnings", []), _TEXT, source, "warnings")
+        values["reasons"] = [Reason.from_value(r, source, "reasons") for r in values.get("reasons", [])]
         _check_gates(values.get("quality_gates", []), source)
         if not math.isfinite(values.get("tolerance_mm", 1.0)) or values.get("tolerance_mm", 1.0) <= 0:
             raise InputError(f"{source}: tolerance_mm must be a positive number of mm")

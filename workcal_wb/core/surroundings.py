@@ -31,6 +31,8 @@ EXTRA_SHARE, MIN_EXTRA = 0.01, 30
 # Another pose replaces the region's when it explains at least REGION_SHARE of what the region's
 # pose explains of the region, and more of the surroundings by at least EXTRA_SHARE of the region.
 REGION_SHARE = 0.98
+# What a reason found with the scan beside the region is said to be of.
+BESIDE = "with the scan beside its region"
 # Two poses are one within these limits (degrees; share of the diagonal at the model's centre).
 SAME_DEG, SAME_DIAGONALS = 1.0, 0.01
 
@@ -61,8 +63,9 @@ def judged_in_surroundings(cloud: Cloud, region: np.ndarray, excluded: np.ndarra
     if _same_pose(wide.matrix, found.matrix, surface):
         if wide.ties and found.status == OK:  # the surroundings leave the region's pose tied with another
             found.status = AMBIGUOUS
-            found.reasons += [f"with the scan beside its region: {r}" for r in wide.ties]
-            found.ties += found.reasons[-len(wide.ties):]
+            said = [r.within(BESIDE) for r in wide.ties]
+            found.reasons += said
+            found.ties += said
             found.candidates = wide.candidates
         return found, region
     gate = max(found.gate_mm, wide.gate_mm) if np.isfinite(found.gate_mm) else wide.gate_mm
@@ -83,7 +86,7 @@ def judged_in_surroundings(cloud: Cloud, region: np.ndarray, excluded: np.ndarra
         f"the region grew by {len(grown) - len(region)} of them"]
     if wide.status != OK and final.status == OK:  # the search on the surroundings stays in doubt
         final.status = AMBIGUOUS
-        final.reasons += [f"with the scan beside its region: {r}" for r in wide.reasons]
+        final.reasons += [r.within(BESIDE) for r in wide.reasons]
         final.ties = list(final.reasons)
         final.candidates = wide.candidates
     return final, grown

@@ -28,7 +28,7 @@ from workcal_wb.core import frames
 from workcal_wb.core.calibration import CalibrationOptions
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.match import METHODS
-from workcal_wb.core.result import FAILED, OK, CalibrationResult
+from workcal_wb.core.result import ERROR, FAILED, OK, CalibrationResult, Reason
 from workcal_wb.fc import inputs as fc_inputs
 from workcal_wb.fc import prefs
 from workcal_wb.fc.placements import placement
@@ -336,7 +336,8 @@ class CalibrationFeature(Feature):
             else:
                 _update_shape(obj, result_of(obj))
         except WorkCalError as exc:
-            store_result(obj, CalibrationResult(FAILED, W=None, reasons=[str(exc)], tolerance_mm=obj.Tolerance.Value))
+            store_result(obj, CalibrationResult(FAILED, W=None, reasons=[Reason(ERROR, str(exc))],
+                                                tolerance_mm=obj.Tolerance.Value))
             obj.Status = "error"
             FreeCAD.Console.PrintError(f"WorkCal: {obj.Label}: {exc}\n")
             raise

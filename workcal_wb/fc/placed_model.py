@@ -66,7 +66,7 @@ def candidates(calibration, role: str) -> list:
         return []
     found = [(best, None)]
     for candidate in (getattr(match, "candidates", None) or [])[1:]:
-        found.append((frames.as_transform(candidate["matrix"], "candidate pose"), None))
+        found.append((candidate.matrix, None))
     for symmetry in getattr(match, "symmetries", None) or []:
         angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else 90.0  # 0: any angle, a quarter shows it
         found.append((best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry))

@@ -120,7 +120,7 @@ def scene_row(variant: str, spec: CellSpec, bunny_folder: Path | None, seed: int
         rotation = frames.rotation_between_deg(result.W, cell.W)
         model = cell.workpiece_model.points
         displacement = float(np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model), axis=1).max())
-    reason = (result.reasons[0] if result.reasons else "")[:90]
+    reason = str(result.reasons[0])[:90] if result.reasons else ""
     return SceneRow(variant, f"{variant} #{spec.seed}", len(cell.cloud), result.status, rotation, displacement,
                     elapsed, reason)
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import frames, pointops
 from ..geometry import Cloud
+from ..result import SYMMETRIC
 from .cases import BUNNY_SCANS, bunny_reference_poses, random_motion
 
 DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
@@ -222,7 +223,7 @@ def judge_cases(cases: list[VerdictCase], seed: int) -> list[VerdictRow]:
 def _short(reasons: list) -> str:
     if not reasons:
         return ""
-    first = reasons[0].split(":")[0] if reasons[0].startswith("the model is symmetric") else reasons[0]
+    first = str(reasons[0]).split(":")[0] if reasons[0].code == SYMMETRIC else str(reasons[0])
     return first if len(first) <= 90 else first[:87] + "..."
 
 

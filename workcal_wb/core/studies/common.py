@@ -149,7 +149,7 @@ def score(result, error: str, truth: Truth, scan=None) -> dict:
     predicted bound and whether it covers the actual displacement."""
     row = {"status": result.status if result is not None else "error", "reason": error}
     if result is not None and not error:
-        row["reason"] = "; ".join(result.reasons)
+        row["reason"] = "; ".join(map(str, result.reasons))
     W = None if result is None else result.W
     if W is None:
         row.update({"rotation_error_deg": None, "translation_error_mm": None, "toolpath_error_mm": None,

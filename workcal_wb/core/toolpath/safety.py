@@ -214,7 +214,7 @@ def gate_text(gate: dict) -> str:
 def failed_checks(calibration: CalibrationResult) -> list[str]:
     """The failed quality gates (or, without gates, the reasons) in words."""
     words = [gate_text(g) for g in calibration.quality_gates if not g.get("passed", False)]
-    return words or list(calibration.reasons) or ["no reason recorded"]
+    return words or [str(r) for r in calibration.reasons] or ["no reason recorded"]
 
 
 def check_calibration(calibration: CalibrationResult, force: bool, source: str = "calibration") -> bool:
