@@ -280,3 +280,52 @@ def test_bad_regions(plain, regions, message):
     scene, scan = plain
     with pytest.raises(InputError, match=message):
         calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
+
+
+@pytest.mark.parametrize("margin", [10.0, 20.0])
+def test_a_region_drawn_loosely_leaves_out_the_platform_and_the_other_object(margin):
+    """A box drawn 10 or 20 mm loosely around the block takes platform points around its foot and some of
+    the workpiece beside it, and one drawn tight round the workpiece takes the table under it: each region
+    is cleaned as automatic ones are (the platform's plane, then points on the other object's placed
+    model), what was left out is counted in the result and said in a warning, and W is "ok" and right
+    (the block's region explained 66-77 % by its model and failed, W right)."""
+    from workcal_wb.core.simulate.cell import CellSpec, cell_scan
+
+    cell = cell_scan(CellSpec(seed=0))
+    points = cell.cloud.points
+    box = {}
+    for role, m in (("reference", margin), ("workpiece", 2.0)):
+        inside = points[cell.mask(role)]
+        lo, hi = inside.min(axis=0) - m, inside.max(axis=0) + m
+        box[role] = np.flatnonzero(np.all((points >= lo) & (points <= hi), axis=1))
+    platform_in_box = cell.mask("platform")[box["reference"]].sum()
+    workpiece_in_box = cell.mask("workpiece")[box["reference"]].sum()
+    assert platform_in_box > 1000 and workpiece_in_box > 100  # as loose as a hasty drag
+    result = calibrate(cell.cloud, cell.workpiece_model, cell.reference_model, regions=box)
+    assert result.status == "ok", result.reasons
+    assert frames.rotation_between_deg(result.W, cell.W) < 0.05
+    trimmed = result.regions["trimmed"]
+    assert trimmed["reference"]["platform"] >= 0.95 * platform_in_box
+    assert trimmed["reference"]["workpiece"] >= 0.9 * workpiece_in_box and trimmed["workpiece"]["platform"] > 1000
+    assert not cell.mask("platform")[result.regions["reference"]].any()
+    warned = [w for w in result.warnings if w.startswith("the reference region given left out")]
+    assert warned and f"{trimmed['reference']['platform']} points on the platform's plane" in warned[0]
+
+
+def test_points_a_region_takes_that_no_model_explains_are_said_where(plain):
+    """A blob of 4000 points (a clamp, a hand) inside the block's region: the region's share explained
+    by the model fails, and the reason says how many points lie off the model and where they are."""
+    scene, scan = plain
+    block = np.flatnonzero(scan.mask("reference"))
+    centre = scan.points[block].mean(axis=0) + [0.0, 0.0, -120.0]
+    blob = centre + np.random.default_rng(0).normal(0.0, 8.0, (4000, 3))
+    cloud = Cloud(np.vstack([scan.points, blob]))
+    regions = {"reference": np.r_[block, len(scan.points) + np.arange(len(blob))],
+               "workpiece": np.flatnonzero(scan.mask("workpiece"))}
+    result = calibrate(cloud, scene.workpiece_model(), scene.reference_model(), regions=regions)
+    assert result.status == "failed" and "reference_explained" in codes(result.reasons), result.reasons
+    said = str(next(r for r in result.reasons if r.code == "reference_explained"))
+    count, where = re.search(r"(\d+) of the region's points lie off the placed reference model, around \((.*?)\) mm",
+                             said).groups()
+    assert abs(int(count) - len(blob)) < 0.05 * len(blob)
+    assert np.linalg.norm(np.array(where.split(", "), float) - centre) < 5.0

@@ -613,3 +613,27 @@ def test_a_coarse_cad_mesh_is_not_given_a_coarser_grid_to_clear_points_through()
     judge._set_view(np.array([0.0, -300.0, 300.0]), points.mean(axis=0), "given")
     assert surface.sample_cover > 20.0 and judge.continued_faces(np.eye(4)) == 0  # none lies that far off
     assert not surface._grids
+
+
+@pytest.mark.parametrize("seed, margin, frame", [(0, 10.0, "sensor"), (1, 15.0, "sensor"), (2, 10.0, "arbitrary")])
+def test_the_platform_a_block_stands_on_is_no_surface_running_on_past_it(seed, margin, frame):
+    """The block with the platform around its foot (a box drawn loosely, or a platform left in a region):
+    the platform meets each side face along the line the block rests on, and there it "goes on past the
+    outline".  Told the plane the part stands on (a calibration's platform), the right pose is "ok"
+    (without it: "ambiguous", the scanned surface going on past 3-7 % of the outline)."""
+    from workcal_wb.core import pointops
+    from workcal_wb.core.regions import find_platform, standing_on
+    from workcal_wb.core.simulate.cell import CellSpec, cell_scan
+
+    cell = cell_scan(CellSpec(seed=seed, frame=frame))
+    points = cell.cloud.points
+    platform = find_platform(points, pointops.median_spacing(points), np.random.default_rng(0))
+    block = points[cell.mask("reference")]
+    lo, hi = block.min(axis=0) - margin, block.max(axis=0) + margin
+    region = np.all((points >= lo) & (points <= hi), axis=1) & ~cell.mask("workpiece")
+    assert cell.mask("platform")[region].sum() > 1000
+    for viewpoint in (None, tuple(cell.scanner_origin)):
+        result = match(Cloud(points[region]), SurfaceModel(cell.reference_model), viewpoint=viewpoint,
+                       support=standing_on(platform))
+        assert result.status == "ok", result.reasons
+        assert frames.rotation_between_deg(result.matrix, cell.V) < 0.05

@@ -21,7 +21,8 @@ from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
 from .match import MEDIUM_POINTS, METHODS, MatchOptions, match, match_pose, refine_given
-from .regions import MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, locate, match_trusted, refit
+from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
+                      near_points, nearer_own_model, refit, standing_on)
 from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, UNCERTAINTY, CalibrationResult, MatchResult,
                      Reason)
 from .surface import SurfaceModel
@@ -142,24 +143,39 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
         warnings += found.warnings
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
+        match_options["support"] = standing_on(found.plane)
         report(0.6, "refining both matches on their regions")
         U_match, V_match = (_refit(scan, region_idx[role], surface, getattr(found, f"{role}_match"),
                                    found.matched[role], match_options, role)
                             for role, surface in (("workpiece", workpiece_surface), ("reference", reference_surface)))
     else:
-        region_idx = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
         source = "user"
+        report(0.05, "finding the platform")
+        scene = _physics_scene(scan, options, None, None)
+        match_options["support"] = standing_on(scene.platform)
+        # A box drawn loosely takes some of the platform: its points are no object's.
+        region_idx, trimmed = {}, {}
+        for role in ("workpiece", "reference"):
+            given = _region(scan, regions, role)
+            region_idx[role] = np.setdiff1d(given, _platform_indices(scan, scene))
+            trimmed[role] = {"platform": len(given) - len(region_idx[role])}
+            if len(region_idx[role]) == 0:
+                raise InputError(f"{role} region: every point of it lies on the platform's plane; pick the {role}")
         report(0.1, "matching the reference region")
         V_match = match_trusted(_region_cloud(scan, region_idx["reference"], "reference"), reference_surface,
                                 match_options, "reference")
         report(0.35, "matching the workpiece region")
         U_match = match_trusted(_region_cloud(scan, region_idx["workpiece"], "workpiece"), workpiece_surface,
                                 match_options, "workpiece")
+        (U_match, V_match), region_idx = _without_the_other_object(
+            scan, region_idx, trimmed, dict(workpiece=workpiece_surface, reference=reference_surface),
+            dict(workpiece=U_match, reference=V_match), scene.spacing, match_options)
+        warnings += _trimmed_words(trimmed)
 
-    scene = _physics_scene(scan, options, *((found.plane, found.spacing) if regions is None else (None, None)))
+    if regions is None:
+        scene = _physics_scene(scan, options, found.plane, found.spacing)
     report(0.65, "weighing both poses against the scan beside their regions")
-    platform_idx = np.flatnonzero(np.isfinite(scan.points).all(axis=1))[scene.platform.below] \
-        if scene.platform is not None else np.empty(0, np.int64)
+    platform_idx = _platform_indices(scan, scene)
     given = dict(region_idx)
     for role, other, surface in (("workpiece", "reference", workpiece_surface),
                                  ("reference", "workpiece", reference_surface)):
@@ -175,7 +191,8 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
                                                  (V_match, reference_surface, "reference")))
     result = dict(workpiece=U_match, reference=V_match, tolerance_mm=options.tolerance_mm, seed=options.seed,
                   inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
-                  regions={**{k: np.asarray(v, dtype=np.int64) for k, v in region_idx.items()}, "source": source},
+                  regions={**{k: np.asarray(v, dtype=np.int64) for k, v in region_idx.items()}, "source": source,
+                           **({"trimmed": trimmed} if regions is not None else {})},
                   warnings=warnings + [f"workpiece match: {w}" for w in U_match.warnings]
                   + [f"reference match: {w}" for w in V_match.warnings])
     failed = [(role, m) for role, m in (("workpiece", U_match), ("reference", V_match)) if m.matrix is None]
@@ -201,11 +218,62 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
             f"{strained['shift_if_scanner_mm']:.3f} mm at the {'toolpath' if toolpath_points is not None else 'part'}. "
             "Only a reference that shows that strain can check the scanner: scan it so that two parallel faces "
             "show along each direction (an L-block's inner faces as well as its outer ones)")
-    gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm)
+    off_model = {role: _off_model(scan, region_idx[role], surface, m)
+                 for role, surface, m in (("workpiece", workpiece_surface, U_match), ("reference", reference_surface, V_match))}
+    gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm, off_model)
     status, reasons = _status(U_match, V_match, gates)
     report(1.0, f"calibration {status}")
     return CalibrationResult(status, W=W, U=U, V=V, uncertainty=uncertainty, quality_gates=gates, reasons=reasons,
                              time_s=time.perf_counter() - started, **result)
+
+
+def _platform_indices(scan: Cloud, scene: physics.Scene) -> np.ndarray:
+    """The scan indices of the platform's points (on or below its plane); none without a platform."""
+    if scene.platform is None:
+        return np.empty(0, np.int64)
+    return np.flatnonzero(np.isfinite(scan.points).all(axis=1))[scene.platform.below]
+
+
+def _without_the_other_object(scan: Cloud, region_idx: dict, trimmed: dict, surfaces: dict, matches: dict,
+                              spacing: float, match_options: dict):
+    """((U match, V match), regions): each region given by hand without the points that lie on the other
+    object's placed model (within regions.joins_within of it and nearer to it than to its own), counted in
+    ``trimmed``; a region that lost some is matched again from its pose."""
+    out = dict(region_idx)
+    for role, other in (("workpiece", "reference"), ("reference", "workpiece")):
+        own, theirs = matches[role], matches[other]
+        if own.matrix is None or theirs.matrix is None:
+            trimmed[role][other] = 0
+            continue
+        idx = region_idx[role]
+        keep = nearer_own_model(scan.points[idx], (surfaces[role], own.matrix), (surfaces[other], theirs.matrix),
+                                joins_within(other, spacing))
+        trimmed[role][other] = int(np.count_nonzero(~keep))
+        if trimmed[role][other] and keep.any():
+            out[role] = idx[keep]
+            matches[role] = refit(_region_cloud(scan, out[role], role), surfaces[role], own, match_options)
+    return (matches["workpiece"], matches["reference"]), out
+
+
+def _off_model(scan: Cloud, idx: np.ndarray, surface: SurfaceModel, found: MatchResult) -> tuple[int, np.ndarray]:
+    """(how many of the region's points lie farther than its match's gate from the placed model, the
+    middle of them in the scan's frame; the region's middle when none do)."""
+    points = scan.points[idx]
+    off = ~near_points(points, surface, found.matrix, found.gate_mm if np.isfinite(found.gate_mm) else 1.0)
+    return int(off.sum()), (points[off] if off.any() else points).mean(axis=0)
+
+
+def _trimmed_words(trimmed: dict) -> list:
+    """The warnings that say what was left out of the regions given by hand."""
+    words = []
+    for role, other in (("workpiece", "reference"), ("reference", "workpiece")):
+        parts = [f"{trimmed[role]['platform']} points on the platform's plane" if trimmed[role]["platform"] else "",
+                 f"{trimmed[role][other]} points on the placed {other} model" if trimmed[role].get(other) else ""]
+        parts = [p for p in parts if p]
+        if parts:
+            words.append(f"the {role} region given left out {' and '.join(parts)} (points of neither the {role} "
+                         "nor its model: the box or lasso took them)")
+    return words
 
 
 def _physics_scene(scan: Cloud, options: CalibrationOptions, platform, spacing) -> physics.Scene:
@@ -409,8 +477,11 @@ def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> n
         translation=-centre)
 
 
-def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float) -> list:
-    """The gates a calibration passes to be "ok", each with a stable "code" (its failing Reason's)."""
+def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float,
+                   off_model: dict) -> list:
+    """The gates a calibration passes to be "ok", each with a stable "code" (its failing Reason's);
+    ``off_model``: per role, how many of its region's points lie off its placed model and where
+    (_off_model), for what to change when too many do."""
     gates = []
     for role, m in (("workpiece", U_match), ("reference", V_match)):
         gates.append({"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
@@ -421,9 +492,13 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
         gates.append({"code": f"{role}_within_tolerance", "name": f"{role} points within tolerance",
                       "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
                       "unit": "%"})
+        count, where = off_model[role]
         gates.append({"code": f"{role}_explained", "name": f"{role} region explained by its model",
                       "value": 100 * m.fitness, "limit": 100 * MIN_FITNESS[role],
-                      "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%"})
+                      "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%",
+                      "why": f"{count} of the region's points lie off the placed {role} model, around "
+                             f"({where[0]:.0f}, {where[1]:.0f}, {where[2]:.0f}) mm in the scan: draw the region "
+                             "tighter there, or leave those points out"})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
     value = uncertainty[key]

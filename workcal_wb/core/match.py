@@ -68,6 +68,9 @@ class MatchOptions:
     rival_significance: float = 3.0
     ambiguity_ratio: float | None = None
     viewpoint: tuple | None = None  # the sensor's position in the scan's frame (mm); None: estimated
+    # The plane the part stands on, when known (a calibration's platform): (a point on it, its normal up
+    # towards the part, its band in mm), in the scan's frame; None: the scan's largest plane wider than the model.
+    support: tuple | None = None
     min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
     max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
@@ -292,7 +295,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless,
                                turns_of)
     sample = fine[:VERDICT_POINTS]
-    support = Support.of(sample, voxel, surface.diagonal, options.seed)
+    support = (Support.given(sample, *options.support) if options.support is not None
+               else Support.of(sample, voxel, surface.diagonal, options.seed))
 
     def judged(best, rivals):
         """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
@@ -366,6 +370,11 @@ def _checked_options(options: MatchOptions) -> MatchOptions:
     if options.viewpoint is not None and not (np.shape(options.viewpoint) == (3,)
                                               and np.isfinite(np.asarray(options.viewpoint, float)).all()):
         raise InputError(f"viewpoint must be three finite coordinates in mm, got {options.viewpoint!r}")
+    if options.support is not None and not (
+            len(options.support) == 3 and all(np.shape(v) == (3,) for v in options.support[:2])
+            and np.isfinite(np.concatenate([np.asarray(v, float) for v in options.support[:2]])).all()
+            and np.linalg.norm(options.support[1]) > 0 and float(options.support[2]) >= 0):
+        raise InputError(f"support must be (a point, a direction up, a band in mm), got {options.support!r}")
     if not options.rival_significance > 0:
         raise InputError(f"rival significance must be > 0 standard errors, got {options.rival_significance}")
     return options
@@ -897,6 +906,8 @@ class Judge:
         # would be filled for this alone.
         maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
                      if surface.grid_level_for(threshold) < PREPARED_LEVELS else np.arange(len(moved)))
+        if self.support is not None:  # the plane the part stands on meets its side faces along its foot
+            maybe_off = maybe_off[~self.support.on_plane[maybe_off]]
         if len(maybe_off) < MIN_CONTINUED_POINTS:
             return 0
         # Beside the model: within a few scan spacings (the rows of a sparse scan), at most
@@ -1021,9 +1032,11 @@ class Judge:
         weights[visibility.facing(self.sample, self.surface.normals[idx] @ T[:3, :3], self.viewpoint)
                 <= visibility.FACING_COS] = 0.0
         samples = self.view_samples
+        # The support's points go on past the outline wherever the part stands on it: no evidence.
+        standing_on = None if self.support is None else self.support.on_plane[:len(self.sample)]
         return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
                                    self.surface.normals[samples] @ T[:3, :3], self.gate, self.gate + 2 * self.pixel,
-                                   OFF_BAND_GATES * self.gate, on_model)
+                                   OFF_BAND_GATES * self.gate, on_model, standing_on)
 
     def wall_thickness(self, T: np.ndarray, evidence: visibility.Evidence) -> float:
         """Median thickness of the part where pose T explains the view (mm; inf without a view)."""
@@ -1345,6 +1358,12 @@ class Support:
     on_plane: np.ndarray
     centre: np.ndarray
     normal: np.ndarray
+
+    @classmethod
+    def given(cls, points: np.ndarray, centre, normal, band: float):
+        """The support a caller knows (a calibration's platform): the points within ``band`` mm of it."""
+        centre, normal = np.asarray(centre, float), np.asarray(normal, float) / np.linalg.norm(normal)
+        return cls(np.abs((points - centre) @ normal) <= band, centre, normal)
 
     @classmethod
     def of(cls, points: np.ndarray, voxel: float, model_diagonal: float, seed: int):

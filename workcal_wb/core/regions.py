@@ -147,7 +147,8 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
                                                            min_fitness=MIN_FITNESS_OF_CLUSTER,
                                                            blas_threads=blas_threads,
-                                                           viewpoint=None if viewpoint is None else tuple(viewpoint)))
+                                                           viewpoint=None if viewpoint is None else tuple(viewpoint),
+                                                           support=standing_on(platform)))
     with ThreadPoolExecutor(max_workers=1) as ahead:  # leaving it waits for a search ahead that was not needed
         if blas_threads == 1:  # a second thread only with BLAS held to one (its own threads would spin)
             _search_ahead(ahead, objects, **context)
@@ -157,12 +158,12 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     (workpiece_match, workpiece_idx, wp_touching, _), (reference_match, reference_idx, ref_touching, _) = (
         found["workpiece"], found["reference"])
     if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
-        reference_idx = reference_idx[_nearer(points[reference_idx], (reference, reference_match.matrix),
+        reference_idx = reference_idx[nearer_own_model(points[reference_idx], (reference, reference_match.matrix),
                                               (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
         # The reference is rigid and unchanged: clay pressed against it lies off its surface.
         within = max(MIN_ON_SURFACE_MM, ON_SURFACE_NOISES * reference_match.noise_mm)
         reference_idx = reference_idx[_on_surface(points[reference_idx], reference, reference_match.matrix, within)]
-        workpiece_idx = workpiece_idx[_nearer(points[workpiece_idx], (workpiece, workpiece_match.matrix),
+        workpiece_idx = workpiece_idx[nearer_own_model(points[workpiece_idx], (workpiece, workpiece_match.matrix),
                                               (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
                         f"scan was split between the placed models; each region is only the points nearer its model")
@@ -261,6 +262,14 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
         labels = _renumbered(labels[~region]) if not on.touching and len(left) \
             else _clusters(points[left], LINK_SPACINGS * spacing)
     return found
+
+
+def standing_on(platform: "Platform | None") -> tuple | None:
+    """A match's ``support`` option for the objects standing on ``platform``: a point on it, its normal
+    up and its band (the plane's points lie within it)."""
+    if platform is None:
+        return None
+    return tuple(float(v) for v in platform.centre), tuple(float(v) for v in platform.up), float(platform.band)
 
 
 def joins_within(role: str, spacing: float) -> float:
@@ -647,7 +656,7 @@ def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: 
     return _OnModel(clusters, held & near if touching else clusters, touching)
 
 
-def _nearer(points: np.ndarray, own, other, distance: float) -> np.ndarray:
+def nearer_own_model(points: np.ndarray, own, other, distance: float) -> np.ndarray:
     """Which points lie nearer to the ``own`` placed model than to the ``other`` ((SurfaceModel, U) each);
     points beyond ``distance`` of the other count as nearer to their own."""
     d_own = own[0].nearest(frames.apply(frames.invert(own[1]), points), np.inf)[0]

@@ -238,7 +238,8 @@ def _around(image: np.ndarray, kind: str) -> np.ndarray:
 
 
 def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, model_normals: np.ndarray,
-             gate: float, depth_margin: float, off_band: float, on_model: np.ndarray | None = None) -> Evidence:
+             gate: float, depth_margin: float, off_band: float, on_model: np.ndarray | None = None,
+             support: np.ndarray | None = None) -> Evidence:
     """The evidence of one pose: ``weights`` (per scan point, in [0, 1]) say how well each scan point
     lies on a model sample facing the viewpoint; ``on_model`` (per scan point, default weights > 0)
     whether it lies on the model's surface at all, facing or not; ``model_points``/``model_normals`` are the model's
@@ -254,7 +255,8 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     model's outline whose points lie on the plane of a flat model face ending there (the scanned
     face goes on where the model's ends: a misplaced outline), unless they lie on the model itself (a
     face seen grazing from the real sensor may turn away from an estimated viewpoint, and the
-    z-buffer of samples leaves such a face's pixels empty).
+    z-buffer of samples leaves such a face's pixels empty) or on the plane the part stands on
+    (``support``, per scan point: it meets every side face along the line the part rests on).
     """
     view = scan.view
     rows, cols = view.shape
@@ -285,6 +287,8 @@ def evidence(scan: ScanView, weights: np.ndarray, model_points: np.ndarray, mode
     on_there = np.bincount(scan.pixel[inside], on[inside], minlength=rows * cols) > 0.5 * count
     continued = _continued(scan, cells, index, (cos > MISSING_COS) & flat, model_points, model_normals, depth_margin)
     continued &= ~on_there
+    if support is not None:
+        continued &= ~(np.bincount(scan.pixel[inside], support[inside], minlength=rows * cols) > 0.5 * count)
     cells[continued] = MISSING
     outline = model_there & ~_around(model_there.reshape(rows, cols), "all").ravel()
     # Off the model: scan pixels inside its outline whose points lie behind its surface, within the
