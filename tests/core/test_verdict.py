@@ -434,6 +434,24 @@ def test_a_part_on_a_table_is_not_ok_upside_down(name, model, motion_seed, seed)
     assert result.status != "ok" or right(surface, result.matrix, motion @ data["truth"]), result.reasons
 
 
+@pytest.mark.parametrize("start_mm", [0.0, 2.2])
+def test_a_block_slid_along_a_motion_only_its_edges_hold_is_not_ok(start_mm):
+    """The L-block on a table (an exact scan 2.7 mm apart, seen on its top and one long side: only
+    the outline holds it along its length), refined from the truth and from the truth slid 2.2 mm
+    along that length.  The fit stops 2.2 mm along it, where the count of points off the model is as
+    low as anywhere within the reach the edges are looked for in: no edge pins the motion, so it is
+    free and the pose no more than "ambiguous", although the faces' eigenvalue ratio along it (0.008)
+    is above the one that makes a motion free on its own."""
+    from workcal_wb.core.benchmark.verdicts import right
+
+    data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / "l-block-on-table.npz")
+    surface = SurfaceModel(shapes.l_block(), 0)
+    start = data["truth"] @ frames.rigid(translation=[start_mm, 0.0, 0.0])
+    result = match(Cloud(data["scan"].astype(float), name="L-block on a table"), surface, tolerance_mm=0.3,
+                   seed=0, init=start)
+    assert result.status != "ok" or right(surface, result.matrix, data["truth"]), result.reasons
+
+
 def _standing(mesh: Cloud) -> Cloud:
     """``mesh`` moved to stand on z = 0, centred in x and y (as the tester placed the parts on the slab)."""
     lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)

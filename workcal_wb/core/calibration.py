@@ -20,11 +20,11 @@ from .distortion import distortion
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
-from .match import MEDIUM_POINTS, METHODS, MatchOptions, match, match_pose, refine_given
+from .match import MEDIUM_POINTS, METHODS, MIN_SCAN_POINTS, MatchOptions, match, match_pose, refine_given
 from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
                       near_points, nearer_own_model, refit, standing_on)
-from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, UNCERTAINTY, CalibrationResult, MatchResult,
-                     Reason)
+from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, SCAN_NOT_SOLID, UNCERTAINTY, CalibrationResult,
+                     MatchResult, Reason)
 from .surface import SurfaceModel
 from .surroundings import judged_in_surroundings
 
@@ -135,11 +135,8 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
                            progress=lambda f, m: report(0.6 * f, m), up=options.up,
                            viewpoint=scanner_origin(scan, options), blas_threads=options.blas_threads)
         except NotFound as exc:  # the calibration ran and found nothing to place: a failed result
-            return CalibrationResult(FAILED, W=None, reasons=[Reason(NOT_FOUND, str(exc))], warnings=warnings,
-                                     regions={"source": "auto"},
-                                     tolerance_mm=options.tolerance_mm, seed=options.seed,
-                                     inputs=_inputs(scan, workpiece_surface, reference_surface, toolpath_points),
-                                     time_s=time.perf_counter() - started)
+            return _failed_before_matching(Reason(NOT_FOUND, str(exc)), "auto", scan, surfaces, toolpath_points,
+                                           options, warnings, started)
         warnings += found.warnings
         region_idx = {"workpiece": found.workpiece, "reference": found.reference, "platform": found.platform}
         source = "auto"
@@ -154,13 +151,17 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
         scene = _physics_scene(scan, options, None, None)
         match_options["support"] = standing_on(scene.platform)
         # A box drawn loosely takes some of the platform: its points are no object's.
+        picked = {role: _region(scan, regions, role) for role in ("workpiece", "reference")}
         region_idx, trimmed = {}, {}
         for role in ("workpiece", "reference"):
-            given = _region(scan, regions, role)
-            region_idx[role] = np.setdiff1d(given, _platform_indices(scan, scene))
-            trimmed[role] = {"platform": len(given) - len(region_idx[role])}
-            if len(region_idx[role]) == 0:
-                raise InputError(f"{role} region: every point of it lies on the platform's plane; pick the {role}")
+            region_idx[role] = np.setdiff1d(picked[role], _platform_indices(scan, scene))
+            trimmed[role] = {"platform": len(picked[role]) - len(region_idx[role])}
+            if len(region_idx[role]) < MIN_SCAN_POINTS:
+                return _failed_before_matching(
+                    Reason(SCAN_NOT_SOLID, f"{role} region: {trimmed[role]['platform']} of its {len(picked[role])} "
+                                           "points lie in the platform's plane, a planar patch with no object on "
+                                           f"it; pick the {role}", role),
+                    "user", scan, surfaces, toolpath_points, options, warnings, started)
         report(0.1, "matching the reference region")
         V_match = match_trusted(_region_cloud(scan, region_idx["reference"], "reference"), reference_surface,
                                 match_options, "reference")
@@ -225,6 +226,14 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     report(1.0, f"calibration {status}")
     return CalibrationResult(status, W=W, U=U, V=V, uncertainty=uncertainty, quality_gates=gates, reasons=reasons,
                              time_s=time.perf_counter() - started, **result)
+
+
+def _failed_before_matching(reason: Reason, source: str, scan: Cloud, surfaces, toolpath_points,
+                            options: CalibrationOptions, warnings: list, started: float) -> CalibrationResult:
+    """A failed result for a calibration that found nothing to match (no regions, no object in one)."""
+    return CalibrationResult(FAILED, W=None, reasons=[reason], warnings=warnings, regions={"source": source},
+                             tolerance_mm=options.tolerance_mm, seed=options.seed,
+                             inputs=_inputs(scan, *surfaces, toolpath_points), time_s=time.perf_counter() - started)
 
 
 def _platform_indices(scan: Cloud, scene: physics.Scene) -> np.ndarray:

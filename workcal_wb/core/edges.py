@@ -16,7 +16,7 @@ import numpy as np
 
 from . import frames
 from .refine import past_edge
-from .stability import FREE_MOTION_RATIO, describe_motion, gelfand
+from .stability import describe_motion, gelfand
 from .surface import SurfaceModel
 
 # Gelfand eigenvalue ratio (see stability) below which a motion is checked against the edges.
@@ -56,7 +56,7 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
     return it with the stability of the fit (see stability.stability) extended by
     ``held_by_edges``: for each such motion its description, eigenvalue and half-width
     ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way (past the off
-    threshold) are listed as free when their eigenvalue is below FREE_MOTION_RATIO."""
+    threshold) are listed as free: their faces hold them weakly (WEAK_RATIO) and no edge pins them."""
     points = points[surface.nearest_cell(frames.apply(T, points), gate + surface.spacing)[2]]  # clutter is no edge
     moved = frames.apply(T, points)
     closest, normals = surface.closest_points(moved)
@@ -72,9 +72,8 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
     for i in np.flatnonzero(vals < WEAK_RATIO):
         twist = unit_twist(vecs[:, i], centre, radius, moved[on])
         interval = _edge_interval(frames.apply(T, points), surface, twist, centre, threshold, reach)
-        if interval is None:
-            if vals[i] < FREE_MOTION_RATIO:
-                free.append(describe_motion(vecs[:, i], centre, radius))
+        if interval is None:  # faces that hold it weakly and no edge within reach: the data leave it free
+            free.append(describe_motion(vecs[:, i], centre, radius))
             continue
         lo, hi = interval
         T = slide(twist, centre, (lo + hi) / 2) @ T
