@@ -18,9 +18,11 @@ from workcal_wb.core.benchmark.run import pose_errors
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
-from workcal_wb.core.result import (FEW_POINTS, MISFIT, NOT_A_SURFACE, SCAN_NOT_SOLID, SYMMETRIC, UNDER_CONSTRAINED,
-                                     MatchResult, codes)
+from workcal_wb.core.benchmark.verdicts import right
+from workcal_wb.core.result import (FEW_POINTS, MISFIT, NOT_A_SURFACE, RMS, SCAN_NOT_SOLID, SYMMETRIC, UNDER_CONSTRAINED,
+                                     Candidate, MatchResult, codes)
 from workcal_wb.core.simulate import shapes
+from workcal_wb.core.simulate.scanner import scan_part
 from workcal_wb.core.simulate.scene import build_scene
 from workcal_wb.core.surface import SurfaceModel
 
@@ -267,3 +269,48 @@ def test_a_duplicate_is_found_when_another_point_shares_its_key():
     first = np.zeros(len(lattice), bool)
     first[np.unique(lattice, axis=0, return_index=True)[1]] = True
     assert np.array_equal(geometry._duplicates(lattice), ~first)
+
+
+def _warped_car_scan(amplitude_mm: float):
+    """(the car's model, a scan of it whose surface waves ``amplitude_mm`` up and down: the part
+    differs from its model, far less noisy than that) and the truth."""
+    mesh = shapes.car()
+    captured = scan_part(mesh, np.eye(4), [0.3, -0.5, 0.8], noise_sigma_mm=0.05, seed=0, samples=20000)
+    points = captured.cloud().points.copy()
+    points[:, 2] += amplitude_mm * np.sin(points[:, 0] / 9.0) * np.cos(points[:, 1] / 7.0)
+    return mesh, Cloud(points, name="warped car"), captured.V
+
+
+@pytest.mark.parametrize("amplitude_mm, status", [(0.5, "ok"), (1.0, "failed")])
+def test_a_match_is_ok_only_as_a_calibration_gate_would_pass_its_region(amplitude_mm, status):
+    """A car scanned at 0.05 mm noise whose surface waves against its model: at 0.5 mm the fit's RMS is
+    0.19 mm, under the 0.3 mm tolerance; at 1.0 mm it is 0.37 mm, which a calibration refuses of either
+    region, and so does a match (its fit, 9 noises, is not far enough off to be a misfit)."""
+    mesh, scan, truth = _warped_car_scan(amplitude_mm)
+    surface = SurfaceModel(mesh, 0)
+    result = match(scan, surface, tolerance_mm=0.3, seed=0)
+    assert right(surface, result.matrix, truth)
+    assert result.status == status, result.reasons
+    if status == "failed":
+        assert RMS in codes(result.reasons) and result.rms_mm > 0.3
+
+
+def test_a_fit_worse_than_the_noise_asks_more_standard_errors_of_a_rival():
+    """The car whose surface waves 1 mm against its model, matched to a 1 mm tolerance: the fit is
+    several times its 0.05 mm noise, so a rival must be more standard errors behind the best than
+    rival_significance (3) to be ruled out, by as many times (as a least-squares fit's standard
+    errors stretch with its residual); a pose 3.2 behind is then a rival, by the view and by the
+    points it leaves far off."""
+    from workcal_wb.core.match import MatchOptions, _mark_rivals
+
+    mesh, scan, truth = _warped_car_scan(1.0)
+    result = match(scan, SurfaceModel(mesh, 0), tolerance_mm=1.0, seed=0)
+    required = result.view["required_standard_errors"]
+    assert required > 2 * MatchOptions().rival_significance
+    assert all(c.rival for c in result.candidates[1:] if c.standard_errors_below_best < required)
+
+    best = Candidate(np.eye(4), score=1.0, fits=True)
+    turned = Candidate(frames.rigid(frames.rot_z(180.0)), score=0.9, standard_errors_below_best=3.2,
+                       far_off_standard_errors=3.2, turn_of_best=True, fits=True)
+    _mark_rivals([best, turned], True, required, MatchOptions())
+    assert turned.rival

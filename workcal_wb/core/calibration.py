@@ -23,8 +23,8 @@ from .refine import coarse_to_fine
 from .match import MEDIUM_POINTS, METHODS, MIN_SCAN_POINTS, MatchOptions, match, match_pose, refine_given
 from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
                       near_points, nearer_own_model, refit, standing_on)
-from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, SCAN_NOT_SOLID, UNCERTAINTY, CalibrationResult,
-                     MatchResult, Reason)
+from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, RMS, SCAN_NOT_SOLID, UNCERTAINTY, WITHIN_TOLERANCE,
+                     CalibrationResult, MatchResult, Reason)
 from .surface import SurfaceModel
 from .surroundings import judged_in_surroundings
 
@@ -124,7 +124,7 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
     match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed,
-                         blas_threads=options.blas_threads)
+                         blas_threads=options.blas_threads, tolerance_gates=False)  # the gates ask it, after distortion
     if scanner_origin(scan, options) is not None:  # the matches judge their views from where the scanner stood
         match_options["viewpoint"] = tuple(scanner_origin(scan, options))
     warnings = list(scan.warnings)
@@ -495,10 +495,10 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
     for role, m in (("workpiece", U_match), ("reference", V_match)):
         gates.append({"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
                       "passed": m.status == OK, "unit": ""})
-        gates.append({"code": f"{role}_rms", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
+        gates.append({"code": f"{role}_{RMS}", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
                       "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})
         share = MIN_WITHIN_TOLERANCE_PCT[role]
-        gates.append({"code": f"{role}_within_tolerance", "name": f"{role} points within tolerance",
+        gates.append({"code": f"{role}_{WITHIN_TOLERANCE}", "name": f"{role} points within tolerance",
                       "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
                       "unit": "%"})
         count, where = off_model[role]

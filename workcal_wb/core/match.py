@@ -40,7 +40,7 @@ from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import Cloud, checked, shape_kind
 from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
-from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
+from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE, RMS, WITHIN_TOLERANCE,
                      NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SCAN_NOT_SOLID,
                      SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, Candidate, MatchResult,
                      Reason)
@@ -73,6 +73,10 @@ class MatchOptions:
     support: tuple | None = None
     min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
+    # Whether "ok" asks the RMS and the share within the tolerance that a calibration asks of a region
+    # (MIN_WITHIN_TOLERANCE_PCT); a calibration's own matches leave it to its gates, which ask it after
+    # the scan's distortion has been read (a scaled scan misfits, and says why there).
+    tolerance_gates: bool = True
     max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
     seed: int = 0
     blas_threads: int | None = 1  # OpenBLAS threads while matching (pointops.blas_threads); None: leave them
@@ -127,6 +131,9 @@ TURNS_APART, QUICK_TURN_POINTS, TURN_FLOOR, TURN_SIGMAS = (10.0, 0.1), 300, 0.85
 # at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
 # matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
 MAX_NOISE_RATIO = 3.0
+# A match is "ok" only when at least this share (%) of its matched points lies within the tolerance,
+# as a calibration's workpiece region must (the reference must have more: regions).
+MIN_WITHIN_TOLERANCE_PCT = 50.0
 # Points that scatter about local quadric fits by more than this fraction of the fit's radius
 # are a volume, not a surface (surface scans measured below 0.1, noisy sparse ones included;
 # a random blob 0.34).
@@ -1187,18 +1194,23 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, ranke
     failures = _failures(fit, judge, view, options, T)
     if not failures:
         judge.weigh_far_off(ranked)
-    _mark_rivals(ranked, fit.sigma <= FAR_OFF_FIT * judge.noise, options)
+    # A fit worse than the noise leaves structure in the residuals that the cells' spread does not see
+    # (the part differs from its model, the sensor has its own): the standard errors are stretched by
+    # that ratio, as a least-squares fit's are by the square root of its reduced chi-square.
+    fit_to_noise = fit.sigma / max(judge.noise, 1e-9)
+    view["required_standard_errors"] = options.rival_significance * max(1.0, fit_to_noise)
+    _mark_rivals(ranked, fit_to_noise <= FAR_OFF_FIT, view["required_standard_errors"], options)
     doubts = [] if failures else _doubts(ranked, surface, judge, view, stab, options, T)
     status = FAILED if failures else AMBIGUOUS if doubts else OK
     n_in, distance = len(fit.distance), fit.distance
     percentiles = {str(q): float(np.percentile(distance, q)) for q in (50, 90, 95, 99)} if n_in else {}
     return MatchResult(
         status, matrix=frames.invert(T), fitness=fit.fitness, coverage=fit.coverage,
-        rms_mm=float(np.sqrt(np.mean(fit.deviation**2))) if n_in else float("nan"),
+        rms_mm=fit.rms,
         mean_directed_hausdorff_mm=float(distance.mean()) if n_in else float("nan"),
         max_deviation_mm=float(distance.max()) if n_in else float("nan"),
         percentiles_mm=percentiles,
-        within_tolerance_pct=float(100 * np.mean(distance <= options.tolerance_mm)) if n_in else 0.0,
+        within_tolerance_pct=fit.within_pct(options.tolerance_mm),
         gate_mm=float(best.gate), n_inliers=int(round(fit.fitness * len(scan))), iterations=int(best.iterations),
         time_s=timer.total(), stability=stab, candidates=ranked, reasons=failures + doubts,
         noise_mm=float(judge.scan_noise), viewpoint=judge.viewpoint_info(), view=view,
@@ -1220,6 +1232,14 @@ class _Fit:
     @property
     def distance(self) -> np.ndarray:
         return np.abs(self.deviation)
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.deviation**2))) if len(self.deviation) else float("nan")
+
+    def within_pct(self, tolerance: float) -> float:
+        """The share (%) of the matched points within ``tolerance`` of the model."""
+        return float(100 * np.mean(self.distance <= tolerance)) if len(self.deviation) else 0.0
 
     @classmethod
     def of(cls, sample: np.ndarray, surface: SurfaceModel, T: np.ndarray, gate: float, voxel: float) -> "_Fit":
@@ -1254,6 +1274,15 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
             f"the model does not fit the scan within its noise: residual scale {fit.sigma:.2f} mm where "
             f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
             f"{tolerance} mm tolerance): the scan may not contain this model")))
+    if options.tolerance_gates and fit.rms > tolerance:
+        reasons.append(Reason(RMS, (
+            f"the fit's RMS {fit.rms:.3f} mm is more than the {tolerance:g} mm tolerance: the part differs "
+            "from its model by more than the tolerance allows, or the pose is off")))
+    if options.tolerance_gates and fit.within_pct(tolerance) < MIN_WITHIN_TOLERANCE_PCT:
+        reasons.append(Reason(WITHIN_TOLERANCE, (
+            f"only {fit.within_pct(tolerance):.0f} % of the matched points lie within the {tolerance:g} mm "
+            f"tolerance (at least {MIN_WITHIN_TOLERANCE_PCT:.0f} %): the part differs from its model by more "
+            "than the tolerance allows, or the pose is off")))
     if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
         view["contradicted_pct"] = 100 * judge.least_contradicted(T)
     if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
@@ -1265,17 +1294,16 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
     return reasons
 
 
-def _mark_rivals(ranked: list, best_fits: bool, options: MatchOptions) -> None:
+def _mark_rivals(ranked: list, best_fits: bool, significance: float, options: MatchOptions) -> None:
     """Mark the Candidates after the best that are rivals: no worse than the best by the view's cells, or
-    better by the points they leave far off, or seen from the other side (or scoring ``ambiguity_ratio``
-    of the best).  The far-off test rules out only a turn of the best refined exactly like it (its flip,
+    better by the points they leave far off (by ``significance`` standard errors), or seen from the other
+    side (or scoring ``ambiguity_ratio`` of the best).  The far-off test rules out only a turn of the best refined exactly like it (its flip,
     tried always; one significantly better by the view's cells, or as good by them and leaving
     significantly fewer points far off, took the best's place, see Judge._with_turns), and only when both
     it and the best fit the scan within FAR_OFF_FIT noises (``best_fits``, on the verdict's points and on
     the fine ones): a pose refined less (or one that does not fit) can leave points far off by being
     unconverged, and on scans simulated by ray casting (open3d 0.19) ruling out such a right pose made a
     flip "ok"."""
-    significance = options.rival_significance
     fits = best_fits and ranked[0].fits
     for c in ranked[1:]:
         ruled_out_far_off = fits and c.fits and c.turn_of_best and c.far_off_standard_errors >= significance
@@ -1309,8 +1337,9 @@ def _doubts(ranked: list, surface: SurfaceModel, judge: Judge, view: dict, stab:
             f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
             f"{r.rotation_from_best_deg:.1f} deg away, scores {r.score_ratio:.0%} of the best, only "
             f"{r.standard_errors_below_best:.1f} standard errors below it ({view['cells']} view cells, "
-            f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}: the part may be "
-            "nearly symmetric; see candidates")))
+            f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}, where "
+            f"{view['required_standard_errors']:.1f} would tell them apart{_stretched_words(view, options)}: "
+            "the part may be nearly symmetric; see candidates")))
     if view.get("off_pct", 0.0) > 100 * MAX_OFF:
         reasons.append(Reason(BEHIND_SURFACE, (
             f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
@@ -1386,6 +1415,15 @@ def _depth_through_support(support: Support | None, surface: SurfaceModel, T: np
         return 0.0
     placed = frames.apply(frames.invert(T), surface.points)
     return float(max(0.0, -((placed - support.centre) @ support.normal).min()))
+
+
+def _stretched_words(view: dict, options: MatchOptions) -> str:
+    """Why more standard errors than ``rival_significance`` are asked, for a rival's reason."""
+    if view["required_standard_errors"] <= options.rival_significance:
+        return ""
+    ratio = view["required_standard_errors"] / options.rival_significance
+    return (f" (the model explains the scan only to {ratio:.1f} times its noise: the part differs from its "
+            "model, or the sensor has structure of its own)")
 
 
 def _far_off_words(candidate: Candidate) -> str:

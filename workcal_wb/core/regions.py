@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import Cloud, shape_kind
-from .match import MatchOptions, match
+from .match import MIN_WITHIN_TOLERANCE_PCT as MIN_MATCH_WITHIN_TOLERANCE_PCT, MatchOptions, match
 from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
                      Reason)
 from .surface import GATE_CELLS, SurfaceModel
@@ -57,7 +57,7 @@ TOUCHING_SHARE = 0.9
 # candidate is explained: the reference is rigid and unchanged, the workpiece may have had clay added
 # or carved.  A wrong model placed "as well as it goes" scores far lower (measured: 10-30 % within
 # tolerance for an ellipsoid or the L-block on a car; fitness 0.36-0.86 for flipped L-block poses).
-MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": 50.0}
+MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": MIN_MATCH_WITHIN_TOLERANCE_PCT}
 MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
 # unless a search comes back to a pose it found before (within these limits).
@@ -145,7 +145,7 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
                    searched={}, labels=labels,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
-                                                           min_fitness=MIN_FITNESS_OF_CLUSTER,
+                                                           min_fitness=MIN_FITNESS_OF_CLUSTER, tolerance_gates=False,
                                                            blas_threads=blas_threads,
                                                            viewpoint=None if viewpoint is None else tuple(viewpoint),
                                                            support=standing_on(platform)))
