@@ -80,6 +80,9 @@ def test_demo_runs_the_whole_job(tmp_path, capsys):
     assert check["rotation_deg"] < 0.02 and check["translation_mm"] < 0.05
     for name in ("result.json", "report.html", "toolpath_calibrated.nc", "toolpath_calibrated.src"):
         assert (tmp_path / name).exists(), name
+        # Every path a file names is one the user can open: none in the folder the run staged it in.
+        assert ".workcal-staging" not in (tmp_path / name).read_text(), name
+    assert f"{tmp_path}/input/toolpath.nc," in (tmp_path / "toolpath_calibrated.src").read_text()
     assert "error against the known truth" in capsys.readouterr().out
 
 

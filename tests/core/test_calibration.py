@@ -329,3 +329,12 @@ def test_points_a_region_takes_that_no_model_explains_are_said_where(plain):
                              said).groups()
     assert abs(int(count) - len(blob)) < 0.05 * len(blob)
     assert np.linalg.norm(np.array(where.split(", "), float) - centre) < 5.0
+
+
+def test_a_tolerance_past_a_share_of_the_models_size_is_refused(plain):
+    """A tolerance of 1e6 mm (or anything over 5 % of the smaller model's diagonal) passes a model
+    several percent the wrong size: refused before any work, naming the model."""
+    scene, scan = plain
+    with pytest.raises(InputError, match=r"tolerance 1e\+06 mm is .* % of the size of B-P \(diagonal"):
+        calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(),
+                  options=CalibrationOptions(tolerance_mm=1e6))

@@ -7,6 +7,7 @@ hypothesis draws the mutations (tests/fuzz_inputs.py) and shrinks a failure to t
 tries the same cases; ``make fuzz`` runs many more with fresh randomness.
 """
 import os
+import re
 
 import numpy as np
 import pytest
@@ -107,3 +108,57 @@ def test_a_mutated_gcode_file_gives_a_toolpath_or_a_workcal_error(folder):
             return
 
     read()
+
+
+# Text that would end a comment or a string, or be read as code, in one program language or another.
+HOSTILE = ["\n", "\r", "\r\n", "\x00", "\x0b", "\x0c", "\x1c", "\x1e", "\x7f", "\x85", "\u2028", "\t", ";", "(", ")",
+           "%", '"', "'", "\\", "[", "]", "{", "}", "&", "!", "#", "/END", "FOLD PTP HIDDEN", "ENDFOLD", ";FOLD",
+           "G0 X0 Y0 Z-500", "LIN {X 0, Y 0, Z -500, A 0, B 0, C 0}", "1,linear,9999,9999,-500,1,0,0,0,0,0,0,1,1",
+           "MoveL [[0,0,-500],[1,0,0,0]]", 'movel(p[0,0,-0.5,0,0,0])', "L P[1] 100mm/sec FINE ;", "M30", "é"]
+TEXT = st.lists(st.one_of(st.sampled_from(HOSTILE), st.text(max_size=6)), min_size=1, max_size=6).map("".join)
+
+
+def test_no_text_from_outside_writes_into_a_program(folder):
+    """Arbitrary text in every slot an export writes from outside (the toolpath file's name, its header
+    and move comments, the reader's warnings, the calibration file's name, its reasons and gate names,
+    the output file's name where the format lets it be any): every program still holds exactly the
+    moves of the toolpath, parsed back (G-code by WorkCal's own reader), every line printable ASCII,
+    and no KRL line a fold marker."""
+    import dataclasses
+
+    from program_checkers import check_fanuc, check_gcode, check_krl, check_rapid, check_urscript
+    from test_toolpath_exporters import PARSERS, SOURCE, assert_poses, calibration, expected
+
+    from workcal_wb.core.result import Reason
+    from workcal_wb.core.toolpath import export, linearised, parse_gcode
+
+    plain = parse_gcode(SOURCE, "part.nc")
+    names = {"krl": "prog.src", "fanuc": "prog.ls"}
+    checks = {"krl": lambda t: check_krl(t, "prog"), "fanuc": lambda t: check_fanuc(t, "PROG"), "rapid": check_rapid,
+              "urscript": check_urscript, "gcode": check_gcode, "csv": lambda t: None}
+
+    @FUZZ
+    @given(fmt=st.sampled_from(sorted(checks)), texts=st.lists(TEXT, min_size=8, max_size=8))
+    def write(fmt, texts):
+        path = dataclasses.replace(plain, source=texts[0], header=[texts[1]], warnings=[texts[2]],
+                                   comments={0: texts[3], 2: texts[4] + "\n" + texts[5]})
+        result = calibration()
+        result.reasons = [Reason("rms", texts[6])]
+        result.quality_gates[0]["name"] = texts[7]
+        stem = "".join(c for c in texts[0] if c not in "/\0")[:40]
+        name = names.get(fmt) or f"p{stem}.{ {'rapid': 'mod', 'urscript': 'script', 'gcode': 'nc', 'csv': 'csv'}[fmt] }"
+        out = folder / fmt / name
+        out.parent.mkdir(exist_ok=True)
+        export(path, result, fmt, out, calibration_source=texts[5], machine="5axis-tcp" if fmt == "gcode" else None)
+        text = out.read_text(encoding="ascii")
+        assert all(line.replace("\t", " ").isprintable() for line in text.split("\n")), text
+        checks[fmt](text)
+        if fmt == "gcode":
+            again = linearised(parse_gcode(text, "again.nc"), 0.01)
+            np.testing.assert_allclose(again.points(), expected(plain)[0], atol=1e-3)
+        else:
+            assert_poses(PARSERS[fmt](text), plain)
+        if fmt == "krl":
+            assert not any(re.match(r"\s*;\s*(END)?FOLD", line, re.I) for line in text.split("\n")), text
+
+    write()

@@ -314,3 +314,11 @@ def test_a_fit_worse_than_the_noise_asks_more_standard_errors_of_a_rival():
                        far_off_standard_errors=3.2, turn_of_best=True, fits=True)
     _mark_rivals([best, turned], True, required, MatchOptions())
     assert turned.rival
+
+
+def test_a_scan_of_denormal_numbers_is_said_to_lie_at_one_point():
+    """Coordinates of about 1e-310 mm: every point within a nanometre of one, said in words."""
+    scan = Cloud(np.random.default_rng(0).normal(size=(500, 3)) * 1e-310, name="tiny.xyz")
+    result = match(scan, SurfaceModel(shapes.sphere(), 0))
+    assert result.status == "failed" and codes(result.reasons) == [SCAN_NOT_SOLID]
+    assert "tiny.xyz: the scan points lie all at one point (or within a nanometre of it)" in result.reasons[0].text

@@ -275,3 +275,76 @@ def test_the_program_names_the_result_json_beside_it(ok_run, scene, tmp_path):
     assert main(["toolpath", "--in", str(scene / "toolpath.nc"), "--calibration", str(out / "result.json"),
                  "--out", str(later)]) == 0
     assert f"result sha256 {digest[:16]}" in later.read_text()
+
+
+# --- SIGKILL at every step of a commit: the folder holds a whole set, or none a reader accepts --------
+
+KILLED_COMMIT = """
+import os, shutil, signal, sys
+sys.path.insert(0, {root!r})
+from workcal_wb.core.outputs import OutputFolder
+steps, limit = [0], int(sys.argv[1])
+
+def counted(operation):
+    def step(*args, **kwargs):
+        if steps[0] == limit:
+            os.kill(os.getpid(), signal.SIGKILL)
+        steps[0] += 1
+        return operation(*args, **kwargs)
+    return step
+
+with OutputFolder({folder!r}, "calibrate", {owned!r}) as outputs:
+    for name, text in {files!r}.items():
+        with open(outputs.file(name), "w") as fh:
+            fh.write(text)
+    os.replace, os.unlink, os.rename, shutil.rmtree = map(counted, (os.replace, os.unlink, os.rename, shutil.rmtree))
+    outputs.commit("ok")
+"""
+OWNED = ("result.json", "report.html", "toolpath_calibrated.*")
+
+
+def test_a_commit_killed_at_any_step_leaves_a_whole_set_or_none_a_reader_takes(tmp_path):
+    """A folder holding a set (result, report, KRL program) gets another (result, G-code program) from a
+    process killed (SIGKILL) at each file operation of its commit in turn, until one is not: at every
+    step the folder holds a manifest listing exactly its outputs with their hashes, or no manifest and a
+    result.json that `workcal toolpath` refuses, naming the folder."""
+    from workcal_wb.core.errors import InputError
+    from workcal_wb.core.outputs import check_whole_set
+
+    first = {"result.json": "first", "report.html": "first", "toolpath_calibrated.src": "first"}
+    second = {"result.json": "second", "toolpath_calibrated.nc": "second"}
+    for limit in range(100):
+        folder = tmp_path / f"kill{limit}"
+        with OutputFolder(folder, "calibrate", OWNED) as outputs:
+            for name, text in first.items():
+                outputs.file(name).write_text(text)
+            outputs.commit("ok")
+        script = KILLED_COMMIT.format(root=str(ROOT), folder=str(folder), owned=OWNED, files=second)
+        done = subprocess.run([sys.executable, "-c", script, str(limit)], capture_output=True, text=True)
+        outputs = sorted(p.name for p in folder.iterdir() if p.name != "manifest.json" and not p.name.startswith("."))
+        if (folder / "manifest.json").exists():
+            listed = json.loads((folder / "manifest.json").read_text())["files"]
+            assert sorted(listed) == outputs, (limit, listed, outputs)
+            assert all(hashlib.sha256((folder / n).read_bytes()).hexdigest() == e["sha256"] for n, e in listed.items())
+            check_whole_set(folder / "result.json")
+        elif (folder / "result.json").exists():
+            with pytest.raises(InputError, match=f"{folder} holds no whole set"):
+                check_whole_set(folder / "result.json")
+        if done.returncode == 0:
+            assert {n: (folder / n).read_text() for n in outputs} == second
+            break
+        assert done.returncode == -signal.SIGKILL, done.stderr
+    else:
+        pytest.fail("the commit never ran to its end")
+    assert limit >= 4  # the manifest, the old program and report, the two new files: every step was killed once
+
+
+def test_a_result_json_that_its_manifest_does_not_list_is_refused(ok_run, scene, tmp_path, capsys):
+    out = fresh_copy(ok_run, scene, tmp_path)
+    result = json.loads((out / "result.json").read_text())
+    result["warnings"].append("edited by hand")
+    (out / "result.json").write_text(json.dumps(result))
+    assert main(["toolpath", "--in", str(scene / "toolpath.nc"), "--calibration", str(out / "result.json"),
+                 "--out", str(tmp_path / "again.nc")]) == 2
+    assert f"{out / 'result.json'}: not the file {out / 'manifest.json'} lists" in capsys.readouterr().err
+    assert not (tmp_path / "again.nc").exists()

@@ -93,6 +93,17 @@ def test_bad_gcode_line_exit_2(files, capsys):
     assert "part.nc: line 2: arc radius mismatch" in capsys.readouterr().err
 
 
+def test_a_chordal_tolerance_finer_than_the_programs_digits_is_refused_at_once(files, capsys):
+    """--chord-tol 1e-9 on an arc cut it into millions of segments (33 s, 1.2 GB, a 124 MB program);
+    positions are written to 0.0001 mm, so a finer tolerance is refused naming the option, and no file
+    is written."""
+    out = files / "p.csv"
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out), "--chord-tol", "1e-9") == 2
+    assert "chordal tolerance (--chord-tol) must be at least 0.0001 mm" in capsys.readouterr().err
+    assert not out.exists()
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out), "--chord-tol", "0.0001") == 0
+
+
 def test_units_in_inches(files):
     (files / "part.nc").write_text("G0 X1 Y0 Z0\nG1 X2 F10\n")
     out = files / "p.csv"
@@ -127,3 +138,9 @@ def test_krl_mode_and_chord_tolerance(files):
     assert run(files, *common, "--out", str(fine), "--chord-tol", "0.001") == 0
     assert "$BASE = $ROBROOT\n" in fine.read_text()
     assert fine.read_text().count("LIN {") > 3 * coarse.read_text().count("LIN {")
+
+
+def test_too_few_lines_per_part_is_refused_naming_the_option(files, capsys):
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.src"), "--max-lines", "1") == 2
+    assert "argument --max-lines: must be at least 10" in capsys.readouterr().err
+    assert not (files / "p.src").exists()

@@ -186,6 +186,11 @@ def test_writer_states_units_and_repeats_full_positions(tmp_path):
     ("G0 X1 Y1 Z1\nG1 X2 #5 F10\n", "line 2: cannot read '#5"),
     ("G0 X1 Y1 Z1\nG0 X2 R1\n", "line 2: R given for a straight move"),
     ("G0 X1 Y1\n", "axis Z is never given"),
+    ("G0 X1 Y1 Z1\nT9007199254740993 M6\n", "line 2: T9007199254740992 is more than 99,999,999"),
+    ("G0 X1 Y1 Z1\nT0 M6\n", "line 2: tool change M6 to T0, which is no tool"),
+    ("G0 X1 Y1 Z1\nT-3 M6\n", "line 2: T-3 is negative"),
+    ("G0 X1 Y1 Z1\nT2.5 M6\n", "line 2: T2.5 is not a whole number"),
+    ("G0 X1 Y1 Z1\nG4 P99999999999999\n", "line 2: a dwell of 1e+11 s, more than 3600 s"),
 ])
 def test_errors_name_the_file_and_line(text, message):
     with pytest.raises(InputError) as err:

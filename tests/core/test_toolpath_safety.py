@@ -62,6 +62,17 @@ def test_a_calibration_without_w_cannot_be_forced(path, tmp_path):
         export(path, CalibrationResult("failed", None), "csv", tmp_path / "p.csv", force=True)
 
 
+@pytest.mark.parametrize("force", [False, True])
+def test_a_calibration_ok_with_a_failed_gate_is_refused_as_inconsistent(force, path, tmp_path):
+    """A result.json that says "ok" while a gate of it failed contradicts itself: no program, forced or not."""
+    inconsistent = calibration()
+    inconsistent.quality_gates[0]["passed"] = False
+    with pytest.raises(InputError, match=r"cal.json: status 'ok' while its gate rms_mm = 0.8 mm, limit 0.3 "
+                                         r"failed: the file contradicts itself"):
+        export(path, inconsistent, "krl", tmp_path / "prog.src", calibration_source="cal.json", force=force)
+    assert files(tmp_path) == []
+
+
 @pytest.mark.parametrize("fmt", sorted(FORMATS))
 def test_a_forced_export_says_so_before_any_motion(fmt, path, tmp_path):
     out = tmp_path / f"prog{FORMATS[fmt].EXTENSION}"

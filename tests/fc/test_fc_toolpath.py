@@ -118,3 +118,25 @@ def test_robot_trajectory_waypoints(job):
         assert wp.Type == "LIN"
         assert wp.Velocity == pytest.approx((move.feed or 3000.0) / 60.0)
     doc.removeObject(obj.Name)
+
+
+def test_a_comment_command_never_becomes_a_move():
+    """A Path comment whose text holds line breaks and G-code reads as one comment, and carries into
+    the calibrated path as one; a move whose name holds a line break and another move (FreeCAD
+    parses it into one command with a G parameter) is refused, naming the object and the line."""
+    import Path
+
+    commands = [Path.Command("G0", {"X": 0.0, "Y": 0.0, "Z": 20.0}),
+                Path.Command("(label)\nG0 X0 Y0 Z-500\n;x)"),
+                Path.Command("G1", {"X": 10.0, "Y": 0.0, "Z": 5.0, "F": 5.0})]
+    tp = fctp.read_toolpath(path_object(Path.Path(commands)))
+    np.testing.assert_allclose(tp.points(), [[0, 0, 20], [10, 0, 5]], atol=1e-9)
+    assert "Z-500" in tp.comments[1] and "\n" not in tp.comments[1]
+    moved, _ = fctp.calibrated_path(tp, calibration(TURNED))
+    again = fctp.read_toolpath(path_object(moved))
+    np.testing.assert_allclose(again.points(), frames.apply(TURNED, tp.points()), atol=1e-6)
+    assert all("\n" not in c.Name for c in moved.Commands)
+
+    bad = [commands[0], Path.Command("G1\nG0 Z-500", {"X": 1.0})]
+    with pytest.raises(InputError, match=r"'injected': line 2: G1 and G0 are both in the motion group"):
+        fctp.read_toolpath(path_object(Path.Path(bad), "injected"))

@@ -59,6 +59,14 @@ def count(text: str) -> int:
     return _checked(value, value >= 1, "at least 1", text)
 
 
+def program_lines(text: str) -> int:
+    """Lines per program part: a whole number, at least what one part's frame takes (ExportOptions)."""
+    from workcal_wb.core.toolpath.safety import MIN_PART_LINES
+
+    value = _whole(text)
+    return _checked(value, value >= MIN_PART_LINES, f"at least {MIN_PART_LINES}", text)
+
+
 def envelope(text: str):
     """A work envelope "xmin,ymin,zmin,xmax,ymax,zmax" in mm."""
     from workcal_wb.core.toolpath import Envelope

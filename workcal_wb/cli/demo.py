@@ -6,6 +6,8 @@ it was digitised), writes the inputs a user would have, then calibrates from tho
 """
 from __future__ import annotations
 
+import dataclasses
+
 import json
 from pathlib import Path
 
@@ -51,7 +53,8 @@ def run(args) -> int:
         scan = read_cloud(inputs / "scan.ply")
         workpiece = read_cloud(inputs / "workpiece.ply")
         reference = read_cloud(inputs / "reference.ply")
-        toolpath = read_gcode(inputs / "toolpath.nc")
+        # Read where it is staged, named where the user will find it (the program's header names it).
+        toolpath = dataclasses.replace(read_gcode(inputs / "toolpath.nc"), source=str(out / "input" / "toolpath.nc"))
         toolpath_points = path_points(toolpath)[0]
         print(f"calibrating {len(scan)} scan points against {workpiece.name} and {reference.name} (automatic regions)")
         result = calibrate(scan, workpiece, reference, toolpath_points=toolpath_points,

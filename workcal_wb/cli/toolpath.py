@@ -5,11 +5,11 @@ import json
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import count, envelope, finite, input_file, non_negative, positive
+from workcal_wb.cli.arguments import envelope, finite, input_file, non_negative, positive, program_lines
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
-from workcal_wb.core.outputs import check_file
+from workcal_wb.core.outputs import check_file, check_whole_set
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, MACHINES, ExportOptions, ExportRefused, RotaryTable,
                                       export, format_for, read_gcode)
@@ -49,7 +49,7 @@ def add_parser(subparsers):
     p.add_argument("--rapid-feed", type=positive, default=DEFAULT_RAPID_FEED_MM_MIN, metavar="MM_PER_MIN",
                    help=f"robot speed for G0 moves (default {DEFAULT_RAPID_FEED_MM_MIN:g} mm/min)")
     add_machine_options(p)
-    p.add_argument("--max-lines", type=count, metavar="N",
+    p.add_argument("--max-lines", type=program_lines, metavar="N",
                    help="lines per program part before a robot program is split into parts called by a main program "
                         "(default: the controller's limit, e.g. 9999 for Fanuc)")
     return p
@@ -105,6 +105,7 @@ def run(args) -> int:
     fmt = args.format or format_for(args.out)
     check_file(args.out)
     toolpath = read_gcode(args.input, units=args.units_in, **read_options(args))
+    check_whole_set(args.calibration)
     calibration = CalibrationResult.from_json(args.calibration, with_regions=False)
     options = ExportOptions(force=args.force, table=_table(args), envelope=args.envelope,
                             chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,

@@ -229,6 +229,11 @@ def _duplicates(points: np.ndarray) -> np.ndarray:
 _BUCKET_HASHES = (0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9)
 
 
+# How a sentence says where points of each shape_kind lie.
+SHAPE_WORDS = {"point": "all at one point (or within a nanometre of it)", "linear": "on a line", "planar": "on a plane",
+               "solid": "spread in three dimensions"}
+
+
 def shape_kind(points: np.ndarray) -> str:
     """'solid', 'planar', 'linear' or 'point': a pose can only be fitted to a 'solid' spread."""
     if len(points) < 3:

@@ -38,7 +38,7 @@ from . import frames, global_search, pointops, visibility
 from .global_search import COARSE_VOXELS_PER_DIAGONAL
 from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
-from .geometry import Cloud, checked, shape_kind
+from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
 from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
 from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE, RMS, WITHIN_TOLERANCE,
                      NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SCAN_NOT_SOLID,
@@ -258,7 +258,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     pointops.hand_back_freed_heap()  # the whole scan's checks are done: their temporaries would stay resident
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
-                           reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points are {kind}; they cannot "
+                           reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; they cannot "
                                                            "fix a pose")])
     fine = pointops.random_subset(scan.points, options.max_fine_points, rng)
     medium = pointops.random_subset(fine, MEDIUM_POINTS, rng)

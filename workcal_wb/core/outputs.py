@@ -6,7 +6,10 @@ with SIGINT/SIGTERM held back for the few renames it takes: the files of the pre
 run does not write again (a program in another format, a program a failed calibration must not
 leave) are removed, the staged files moved in, and ``manifest.json`` written last: it names the
 command, the status and the SHA-256 of every file of the set, so a reader can check that what it
-loads belongs together.
+loads belongs together.  The old manifest goes first, so at every instant the folder holds a whole
+set (its manifest and every file it lists) or none (no manifest: a run killed while it committed
+leaves its staging folder beside whatever files it had moved); ``check_whole_set`` is what a
+reader asks of a file in such a folder.
 
 A run that ends in an error after it started removes the previous set too (nothing stale is left
 beside an error); an interrupted run (Ctrl-C, SIGTERM) leaves the previous set as it was.  Files
@@ -28,7 +31,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .atomic import PART_SUFFIX, atomic_write_text, remove_stale_parts
-from .errors import OutputError
+from .errors import InputError, OutputError
 
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = "workcal-outputs"
@@ -127,6 +130,7 @@ class OutputFolder:
                     "files": listed}
         try:
             with _locked(self.path), signals_deferred():
+                (self.path / MANIFEST).unlink(missing_ok=True)  # no whole set from here to the new manifest
                 if not (adding and self.committed):
                     self._remove_previous(keep=set(staged))
                 for name in staged:
@@ -166,6 +170,26 @@ class OutputFolder:
                 self._remove_previous(keep=set())
         except OSError:
             pass  # the error being raised says what went wrong; this one would hide it
+
+
+def check_whole_set(path) -> None:
+    """Refuse ``path`` when it lies in an output folder that holds no whole set: beside a manifest that
+    does not list it with these contents, or beside a run's staging folder with no manifest (a run
+    stopped while it swapped its set in).  A file with neither beside it is not such an output."""
+    path = Path(path)
+    folder, manifest = path.parent, path.parent / MANIFEST
+    if manifest.is_file():
+        try:
+            listed = json.loads(manifest.read_text(encoding="utf-8"))["files"][path.name]
+            whole = listed == _digest(path)
+        except (OSError, ValueError, KeyError, TypeError):
+            whole = False
+        if not whole:
+            raise InputError(f"{path}: not the file {manifest} lists (another run's, or changed since): "
+                              "run the calibration again")
+    elif any(entry.startswith(".workcal-staging.") for entry in os.listdir(folder)):
+        raise InputError(f"{path}: {folder} holds no whole set of outputs (no {MANIFEST}, and a run's "
+                          "staging folder: the run was stopped while it wrote them): run the calibration again")
 
 
 def _digest(path: Path) -> dict:

@@ -306,6 +306,9 @@ def _ply_header(data: bytes, label: str) -> _PlyHeader:
     if not re.match(rb"ply\r?\n", data):
         raise InputError(f"{label}: not a PLY file (it does not start with a 'ply' line)")
     end = re.search(rb"^end_header[ \t]*(?:\r?\n|\Z)", data[:_MAX_HEADER_BYTES], re.M)
+    if end is None and len(data) > _MAX_HEADER_BYTES:
+        raise InputError(f"{label}: the PLY header goes on past {_MAX_HEADER_BYTES:,} bytes without an end_header "
+                         "line (a point cloud's header takes a few hundred)")
     if end is None:
         raise InputError(f"{label}: the PLY header has no end_header line")
     byte_order, units, elements, have_format, viewpoint = None, None, [], False, None
@@ -942,6 +945,10 @@ _NORMAL_HEADERS = (["nx", "ny", "nz"], ["normal_x", "normal_y", "normal_z"], ["n
 def _parse_text_cloud(data: bytes, label: str) -> _Parsed:
     """x y z per line (whitespace, comma or semicolon), after any header lines; extra columns ignored."""
     lines = _text(data, label).splitlines()
+    longest = max(range(len(lines)), key=lambda number: len(lines[number]), default=None)
+    if longest is not None and len(lines[longest]) > MAX_TEXT_LINE_CHARS:
+        raise InputError(f"{label}: line {longest + 1} is {len(lines[longest]):,} characters long (at most "
+                         f"{MAX_TEXT_LINE_CHARS:,}): a point line holds x y z and a few more numbers, one point a line")
     first = next((number for number, line in enumerate(lines) if _is_point_line(line)), None)
     if first is None:
         raise InputError(f"{label}: no line with at least three numbers (x y z) found")
@@ -963,6 +970,11 @@ def _parse_text_cloud(data: bytes, label: str) -> _Parsed:
             warnings.append(f"{label}: columns 4-6 are named {', '.join(names[3:6])} but are not unit "
                             "vectors; they were not used as normals")
     return _Parsed(table[:, :3], normals, warnings=tuple(warnings))
+
+
+# The longest line a text cloud may have: a point with a hundred scalar fields fits; a whole cloud
+# written on one line (27 million numbers read for 23 s into 1.4 GB) does not.
+MAX_TEXT_LINE_CHARS = 10_000
 
 
 def _check_point_count(declared: int, table: np.ndarray, lines: list[str], first: int, label: str) -> None:
@@ -1073,15 +1085,27 @@ def _parse_obj(data: bytes, label: str) -> _Parsed:
     corners_per_face = [line.group(1).split() for line in face_lines]
     lengths = np.array([len(corners) for corners in corners_per_face], dtype=np.int64)
     references = [corner.split("/", 1)[0] for corners in corners_per_face for corner in corners]
+    face_of = np.repeat(np.arange(len(face_lines)), lengths)
+
+    def where(corner: int) -> str:
+        return f"{label}: line {text.count(chr(10), 0, face_lines[face_of[corner]].start()) + 1}"
+
     try:
         indices = np.array(references, dtype=np.int64)
     except ValueError:
-        raise InputError(f"{label}: an 'f' line has a vertex reference that is not a whole number") from None
+        bad = next(k for k, reference in enumerate(references) if not re.fullmatch(r"[+-]?\d+", reference))
+        raise InputError(f"{where(bad)}: 'f' refers to vertex {references[bad][:40]!r}, not a whole number") from None
     if np.any(indices == 0):
-        raise InputError(f"{label}: an 'f' line refers to vertex 0; OBJ vertices count from 1")
-    defined_before = np.searchsorted([match.start() for match in vertex_lines],
-                                     [match.start() for match in face_lines])
-    indices = np.where(indices > 0, indices - 1, indices + np.repeat(defined_before, lengths))
+        raise InputError(f"{where(int(np.argmax(indices == 0)))}: 'f' refers to vertex 0; OBJ vertices count from 1")
+    defined_before = np.repeat(np.searchsorted([match.start() for match in vertex_lines],
+                                               [match.start() for match in face_lines]), lengths)
+    outside = (indices > len(points)) | (indices < -defined_before)
+    if outside.any():
+        bad = int(np.argmax(outside))
+        raise InputError(f"{where(bad)}: 'f' refers to vertex {indices[bad]}, and the file has "
+                         f"{len(points) if indices[bad] > 0 else defined_before[bad]} vertices "
+                         f"{'in all' if indices[bad] > 0 else 'before that line'}")
+    indices = np.where(indices > 0, indices - 1, indices + defined_before)
     warnings: list[str] = []
     triangles = _fan_triangles(indices, lengths, label, warnings)
     return _Parsed(points, triangles=triangles, warnings=tuple(warnings))

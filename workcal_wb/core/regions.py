@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
-from .geometry import Cloud, shape_kind
+from .geometry import SHAPE_WORDS, Cloud, shape_kind
 from .match import MIN_WITHIN_TOLERANCE_PCT as MIN_MATCH_WITHIN_TOLERANCE_PCT, MatchOptions, match
 from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
                      Reason)
@@ -124,7 +124,7 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     on_scan = points[valid]  # the valid points, copied once
     kind = shape_kind(on_scan)
     if kind != "solid":
-        raise NotFound(f"{scan.name}: the scan points are {kind}; a scene scan shows the platform and the "
+        raise NotFound(f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; a scene scan shows the platform and the "
                        "objects standing on it")
     rng = np.random.default_rng(seed)
     spacing = pointops.median_spacing(on_scan, seed=seed)

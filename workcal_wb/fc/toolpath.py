@@ -24,8 +24,8 @@ from workcal_wb.core.errors import InputError, MissingDependency
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, RAPID, Envelope, ExportOptions, RotaryTable,
                                       Toolpath, export, format_for, linearised, parse_gcode, read_gcode, transformed)
-from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, robot_path
-from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES
+from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, comment_text, robot_path
+from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES, gcode_comment
 from workcal_wb.core.toolpath.model import ARC_CCW, ARC_CW, KINDS
 from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
 from workcal_wb.fc.placements import placement
@@ -95,11 +95,13 @@ def _paths(obj) -> list:
 
 
 def _gcode_line(command) -> str:
-    """One command as G-code in mm and mm/min (fixed-point: the reader takes no exponents).
+    """One command as one line of G-code in mm and mm/min (fixed-point: the reader takes no exponents),
+    a comment's text on one line (comment_text: FreeCAD keeps a comment command's name as given, line
+    breaks and all; it parses any other name into a word and parameters).
 
     A/B words are read as WorkCal's tool-axis angles (as the G-code exporter writes them); C is refused."""
     if command.Name.startswith("("):
-        return command.Name
+        return gcode_comment(comment_text(command.Name[1:-1] if command.Name.endswith(")") else command.Name[1:]))
     words = [f"{k}{v * SECONDS_PER_MINUTE if k == 'F' else v:.9f}" for k, v in command.Parameters.items()]
     return " ".join([command.Name] + words)
 
@@ -120,7 +122,7 @@ def _commands(path: Toolpath) -> list:
     commands = []
     starts, arc = path.starts(), -1
     for i in range(len(path)):
-        commands += [Path.Command(f"({c})") for c in path.comments.get(i, "").split("\n") if c]
+        commands += [_comment_command(c) for c in path.comments.get(i, "").split("\n") if c]
         kind = KINDS[path.kind[i]]
         params = dict(zip(AXES, map(float, path.end[i])))
         if kind in (ARC_CW, ARC_CCW):
@@ -150,9 +152,14 @@ def calibrated_path(toolpath: Toolpath, calibration: CalibrationResult, *, force
     T, forced = checked_placement(toolpath, calibration, options)
     moved = transformed(toolpath, T, chord_tol_mm)
     header = (forced_banner(calibration) if forced else []) + moved.header
-    commands = [Path.Command(f"({c})") for c in header] + _commands(moved)
-    commands += [Path.Command(f"({c})") for c in moved.footer]
+    commands = [_comment_command(c) for c in header] + _commands(moved)
+    commands += [_comment_command(c) for c in moved.footer]
     return Path.Path(commands), forced
+
+
+def _comment_command(text: str):
+    """A Path comment command holding ``text`` on one line, as a G-code comment (common.comment_text)."""
+    return Path.Command(gcode_comment(comment_text(text)))
 
 
 PATH_PROPERTIES = [

@@ -54,6 +54,11 @@ M_GROUP = {code: name for name, codes in M_GROUPS.items() for code in codes}
 SPINDLE_M = {3: "cw", 4: "ccw", 5: "off"}
 COOLANT_M = {7: "mist", 8: "flood", 9: "off"}
 BLOCK_DELETE = ("on", "off")  # the switch: "on" skips "/" blocks, "off" runs them
+# The largest whole number a word such as T or H takes: eight digits, the most controls read, and exact
+# as a float (T9007199254740993 would read as ...992).
+MAX_WORD_INTEGER = 99_999_999
+# The longest dwell taken (s): a program waiting longer has its P in the wrong unit, or is no program.
+MAX_DWELL_S = 3600.0
 DWELL_P = ("auto", "seconds", "ms")  # G4 P: "auto" = milliseconds without a decimal point (Fanuc, Haas), else seconds
 
 # Start and end radius of an IJK arc may differ by this much (absolute or relative, the larger).
@@ -222,6 +227,12 @@ def _fast_move(text: str, state: _State, number: int) -> bool:
     return True
 
 
+def gcode_comment(text: str) -> str:
+    """``text`` (one line) as a G-code comment: its parentheses as brackets, ';' (a comment start) as ',',
+    '%' (a program boundary) as ' pct'."""
+    return "(" + text.replace("(", "[").replace(")", "]").replace(";", ",").replace("%", " pct") + ")"
+
+
 def _split_comments(text: str, source: str, number: int) -> tuple[list[str], str]:
     comments = [(m.group(1) if m.group(1) is not None else m.group(2)).strip() for m in _COMMENT.finditer(text)]
     rest = _COMMENT.sub(" ", text).strip()
@@ -317,6 +328,9 @@ def _block(text: str, state: _State, source: str, number: int) -> str | None:
     if 6 in m:
         if state.tool is None:
             raise InputError(f"{source}: line {number}: tool change M6 without a tool number T")
+        if state.tool == 0:
+            raise InputError(f"{source}: line {number}: tool change M6 to T0, which is no tool (an empty spindle, "
+                             "a robot's bare flange)")
         event(TOOL_CHANGE, f"T{state.tool}", state.tool)
     for code in m:
         if code in SPINDLE_M:
@@ -350,8 +364,13 @@ def _event_maker(state: _State, number: int):
 
 
 def _integer(value: float, letter: str, source: str, number: int) -> int:
-    if value != int(value) or value < 0:
+    if value < 0:
+        raise InputError(f"{source}: line {number}: {letter}{value:g} is negative")
+    if value != int(value):
         raise InputError(f"{source}: line {number}: {letter}{value:g} is not a whole number")
+    if value > MAX_WORD_INTEGER:
+        raise InputError(f"{source}: line {number}: {letter}{value:.0f} is more than {MAX_WORD_INTEGER:,}, the "
+                         "largest number such a word takes")
     return int(value)
 
 
@@ -366,6 +385,10 @@ def _dwell(words: dict, state: _State, event, source: str, number: int) -> None:
         raise InputError(f"{source}: line {number}: G4 dwell without its time (P or X)")
     if seconds < 0:
         raise InputError(f"{source}: line {number}: negative dwell time")
+    if seconds > MAX_DWELL_S:
+        raise InputError(f"{source}: line {number}: a dwell of {seconds:g} s, more than {MAX_DWELL_S:g} s: a "
+                         "program that waits that long is a mistake (P in seconds where milliseconds were meant? "
+                         "see --dwell-p)")
     event(DWELL, "", seconds)
     if words:
         raise InputError(f"{source}: line {number}: G4 dwell with {' '.join(sorted(words))}: "

@@ -17,7 +17,7 @@ from ..errors import InputError, WorkCalError
 from ..result import OK, CalibrationResult
 from . import orientation
 from .model import RotaryTable, Toolpath
-from .transform import DEFAULT_CHORD_TOL_MM, path_points, placement
+from .transform import DEFAULT_CHORD_TOL_MM, MIN_CHORD_TOL_MM, path_points, placement
 
 # No robot cell or machine tool reaches past this (mm from the base frame's origin): a W or a point
 # beyond it is a broken calibration or a unit mix-up, refused even without an --envelope.
@@ -26,6 +26,8 @@ MACHINES = ("3axis", "5axis-tcp", "robot")
 # Largest tilt of the tool axis from the machine's Z that a 3-axis export accepts unless told otherwise.
 DEFAULT_VERTICAL_TOL_DEG = 0.05
 DEFAULT_FANUC_CONFIG = "N U T, 0, 0, 0"
+# The fewest lines a program part may be cut to: its frame (header, declarations, END) takes that many.
+MIN_PART_LINES = 10
 FANUC_CONFIG = re.compile(r"[NF] [UD] [TB], -?[0-9], -?[0-9], -?[0-9]")
 
 
@@ -121,8 +123,9 @@ class ExportOptions:
     calibration_source: str = "calibration"
 
     def check(self) -> None:
-        if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm > 0):
-            raise InputError(f"chordal tolerance must be a positive number of mm, not {self.chord_tol_mm}")
+        if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm >= MIN_CHORD_TOL_MM):
+            raise InputError(f"chordal tolerance (--chord-tol) must be at least {MIN_CHORD_TOL_MM:g} mm (positions are "
+                             f"written to that), not {self.chord_tol_mm:g}")
         if self.machine is not None and self.machine not in MACHINES:
             raise InputError(f"unknown machine {self.machine!r}; use one of {', '.join(MACHINES)}")
         if not (math.isfinite(self.vertical_tol_deg) and 0 <= self.vertical_tol_deg < 90):
@@ -134,8 +137,9 @@ class ExportOptions:
                              "base side (T/B) and the turn numbers of J1, J4, J6, as in 'N U T, 0, 0, 0'")
         if not (math.isfinite(self.rapid_feed_mm_min) and self.rapid_feed_mm_min > 0):
             raise InputError(f"rapid feed must be a positive number of mm/min, not {self.rapid_feed_mm_min}")
-        if self.max_lines is not None and self.max_lines < 10:
-            raise InputError(f"lines per program part must be at least 10, not {self.max_lines}")
+        if self.max_lines is not None and self.max_lines < MIN_PART_LINES:
+            raise InputError(f"lines per program part (--max-lines) must be at least {MIN_PART_LINES}, "
+                             f"not {self.max_lines}")
 
 
 def check_moves(toolpath: Toolpath) -> None:
@@ -221,6 +225,10 @@ def check_calibration(calibration: CalibrationResult, force: bool, source: str =
     """True when the export goes ahead only because it was forced; refuses a non-"ok" result otherwise."""
     if calibration.W is None:
         raise InputError(f"{source}: calibration has no transform W (status {calibration.status!r}); nothing to export")
+    failed = [g for g in calibration.quality_gates if g.get("passed") is False]
+    if calibration.status == OK and failed:
+        raise InputError(f"{source}: status 'ok' while its {gate_text(failed[0])} failed: the file contradicts "
+                         "itself (edited, or not written by WorkCal); calibrate again")
     if calibration.status == OK:
         return False
     if not force:

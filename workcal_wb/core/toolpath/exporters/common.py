@@ -98,11 +98,24 @@ def header_lines(job: ExportJob, format_name: str, notes: list[str]) -> list[str
 
 
 def wrapped(lines, width: int) -> list[str]:
-    """Comment lines cut at ``width`` characters (at spaces where possible), none empty."""
+    """Comment lines cut at ``width`` characters (at spaces where possible), none empty, each one line
+    of plain text (comment_text)."""
     out = []
     for line in lines:
-        out += textwrap.wrap(line, width, break_long_words=True, break_on_hyphens=False) or ["-"]
+        out += textwrap.wrap(comment_text(line), width, break_long_words=True, break_on_hyphens=False) or ["-"]
     return out
+
+
+def comment_text(text) -> str:
+    """``text`` as one line of plain ASCII (ascii_text), each control character a space: a line break,
+    NUL, a form feed or a separator (which str.splitlines breaks at) would end a comment and let the
+    rest be read as code.  Every text from outside (file names, the CAM file's comments and words,
+    result.json's text) reaches a program through this, then through its format's comment or string."""
+    return _CONTROL.sub(" ", ascii_text(str(text)))
+
+
+# The ASCII control characters (ascii_text has made every other character printable ASCII or '?').
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 def robot_notes(job: ExportJob, speed_unit: str) -> list[str]:
@@ -232,7 +245,7 @@ def move_groups(path: RobotPath, event_lines, comment_line, move_line):
         lines = []
         for e in events.get(i, ()):
             lines += event_lines(e)
-        lines += [comment_line(c) for c in path.comments.get(i, "").split("\n") if c]
+        lines += [comment_line(comment_text(c)) for c in path.comments.get(i, "").split("\n") if c]
         yield lines + move_line(i, stops)
     tail = []
     for e in events.get(len(path), ()):
@@ -251,7 +264,14 @@ class Action:
 
 
 def action(event: Event) -> Action:
-    """An event in words, the same for every robot language (each writes it its own way)."""
+    """An event in words, the same for every robot language (each writes it its own way), its message
+    one line of plain text (comment_text)."""
+    act = _action(event)
+    act.message = comment_text(act.message)
+    return act
+
+
+def _action(event: Event) -> Action:
     n = event.number
     if event.kind == STOP:
         optional = event.code == "M1"

@@ -18,7 +18,7 @@ def render(job: common.ExportJob):
              "angles: quaternion qw qx qy qz (unit) and A B C in degrees, Z-Y'-X'' (R = Rz(A) Ry(B) Rx(C))",
              "positions: robot base frame B; comments and events of the source path are not carried",
              *common.robot_notes(job, "mm/min")]
-    lines = [f"# {h}" for h in common.header_lines(job, NAME, notes)] + [COLUMNS]
+    lines = [f"# {common.comment_text(h)}" for h in common.header_lines(job, NAME, notes)] + [COLUMNS]
     xyz = np.array(numbers(path.position, 4)).reshape(-1, 3)
     q = np.array(numbers(quaternion_wxyz(path.rotation), 8)).reshape(-1, 4)
     abc = np.array(numbers(kuka_abc_deg(path.rotation), 4)).reshape(-1, 3)

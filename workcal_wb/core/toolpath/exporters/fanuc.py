@@ -49,7 +49,8 @@ def _event_lines(event) -> list[str]:
     if act.tool is not None:
         lines.append(f"UTOOL_NUM={act.tool} ;")
     if act.stop:
-        lines += [f"MESSAGE[{act.message.replace(';', ',')[:MESSAGE_WIDTH]}] ;", "PAUSE ;"]
+        message = common.comment_text(act.message).replace(";", ",").replace("[", "(").replace("]", ")")
+        lines += [f"MESSAGE[{message[:MESSAGE_WIDTH]}] ;", "PAUSE ;"]
     return lines
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import orientation
-from ..gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANES, PLANE_OF_AXIS
+from ..gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES, gcode_comment
 from ..model import (ARC_CCW, ARC_CW, COOLANT, DWELL, FIRST_ARC_CODE, KINDS, LENGTH_OFFSET, SPINDLE, STOP,
                      TOOL_CHANGE)
 from ..safety import check_vertical, numbers, writable
@@ -32,8 +32,9 @@ TCP_ON = "G43.4"  # Fanuc 30i-family tool-centre-point control; Siemens TRAORI, 
 
 
 def comment(text: str) -> str:
-    """A G-code comment: no nested parentheses, no ';' (a comment start) and no '%' (a program boundary)."""
-    return "(" + text.replace("(", "[").replace(")", "]").replace(";", ",").replace("%", " pct") + ")"
+    """A G-code comment on one line (common.comment_text): no nested parentheses, no ';' (a comment
+    start) and no '%' (a program boundary)."""
+    return gcode_comment(common.comment_text(text))
 
 
 def _event_blocks(event, machine: str) -> list[str]:

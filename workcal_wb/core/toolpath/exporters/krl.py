@@ -13,6 +13,8 @@ KUKA programs are meant to be re-used on a moved part; ``transformed`` writes po
 """
 from __future__ import annotations
 
+import re
+
 from ..orientation import kuka_abc_deg
 from ..safety import numbers
 from . import common
@@ -46,9 +48,19 @@ def frame(T) -> str:
     return frames_text(T[None, :3, :3], T[None, :3, 3])[0]
 
 
+def comment(text: str) -> str:
+    """A KRL comment line: ``;`` and the text (one line: common.comment_text), never a fold marker
+    (``;FOLD`` / ``;ENDFOLD`` make the KUKA editor fold away the lines between them)."""
+    text = common.comment_text(text)
+    return ";" + ("- " + text if _FOLD.match(text) else text)
+
+
+_FOLD = re.compile(r"\s*(END)?FOLD", re.IGNORECASE)
+
+
 def _event_lines(event) -> list[str]:
     act = common.action(event)
-    lines = [f";{act.message}"]
+    lines = [comment(act.message)]
     if act.dwell_s is not None:
         lines.append(f"WAIT SEC {numbers([act.dwell_s], 3)[0]}")
     if act.stop:
@@ -72,7 +84,7 @@ def _moves(path):
             lines.append(f"$VEL.CP = {numbers([speed[0] / 60000.0], 6)[0]}")
         return lines + [f"LIN {targets[i]}" + ("" if stops(i) else " C_DIS")]
 
-    return common.move_groups(path, _event_lines, lambda c: f";{c}", move)
+    return common.move_groups(path, _event_lines, comment, move)
 
 
 def _module(name: str, head: list[str], body: list[str]) -> str:
@@ -94,7 +106,7 @@ def render(job: common.ExportJob):
              f"PLACEHOLDERS to fill on the controller: TOOL_DATA[{'], TOOL_DATA['.join(map(str, tools))}] = the "
              "spindle's TCP with that tool, Z along the tool into the part (the program halts while it is unset); "
              "XHOME = a safe home the robot reaches from anywhere"]
-    head = [f";{h}" for h in common.wrapped(common.header_lines(job, NAME, notes), COMMENT_WIDTH)]
+    head = [comment(h) for h in common.wrapped(common.header_lines(job, NAME, notes), COMMENT_WIDTH)]
     setup = ["BAS(#INITMOV, 0)", f"BAS(#TOOL, {first_tool})",
              f"$BASE = $ROBROOT:{frame(job.transform)}" if base_mode else "$BASE = $ROBROOT",
              f"IF (TOOL_DATA[{first_tool}].X == 0) AND (TOOL_DATA[{first_tool}].Y == 0) AND "

@@ -40,7 +40,8 @@ def poses_text(rotation, position) -> list[str]:
 
 
 def _string(text: str) -> str:
-    return '"' + text.replace('"', "'").replace("\\", "/")[:MAX_STRING] + '"'
+    """A RAPID string of one line (common.comment_text) with no '"' nor '\\' (its quote and escape)."""
+    return '"' + common.comment_text(text).replace('"', "'").replace("\\", "/")[:MAX_STRING] + '"'
 
 
 def _moves(path, speed_names: dict, first_tool: int):
@@ -53,7 +54,7 @@ def _moves(path, speed_names: dict, first_tool: int):
         return [f"    {kind} [{targets[i][1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
                 f"{zone}, {tool_name(tools[i])}\\WObj:={WOBJ};"]
 
-    return common.move_groups(path, _event_lines, lambda c: f"    ! {c}", move)
+    return common.move_groups(path, _event_lines, lambda c: f"    ! {common.comment_text(c)}", move)
 
 
 def _event_lines(event) -> list[str]:

@@ -42,7 +42,8 @@ def tcp_name(number: int) -> str:
 
 
 def _string(text: str) -> str:
-    return '"' + text.replace('"', "'") + '"'
+    """A URScript string of one line (common.comment_text) with no '"' nor '\\' (its quote and escape)."""
+    return '"' + common.comment_text(text).replace('"', "'").replace("\\", "/") + '"'
 
 
 def _event_lines(event) -> list[str]:
