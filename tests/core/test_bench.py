@@ -122,6 +122,24 @@ def test_verdict_table_counts_statuses_and_wrong_oks():
     assert "not reported \"ok\": **1 of 2** (goal 0)" in text
 
 
+def test_each_checks_refusals_are_counted_on_right_and_wrong_poses():
+    """The cost table: a code's right poses refused (alone: nothing else refused them) and wrong poses
+    it stopped (alone: no other check did), most costly first; "ok" rows do not count."""
+    from workcal_wb.core.benchmark.verdicts import VerdictRow, table
+
+    def row(name, status, right, codes):
+        return VerdictRow(name, "g", 100, 0.3, 0.1, False, status, right, "", codes)
+
+    rows = [row("a", "ok", True, ()), row("b", "ambiguous", True, ("rival",)),
+            row("c", "ambiguous", True, ("rival", "outline_continued")), row("d", "ambiguous", False, ("rival",)),
+            row("e", "failed", False, ("misfit", "rival")), row("f", "failed", True, ("rms",))]
+    text, _ = table(rows, seed=0)
+    costs = text[text.index("| code | right poses refused"):].split("\n")
+    assert costs[2:5] == ["| `rival` | 2 | 1 | 2 | 1 |", "| `rms` | 1 | 1 | 0 | 0 |",
+                          "| `outline_continued` | 1 | 0 | 0 | 0 |"]
+    assert costs[5] == "| `misfit` | 0 | 0 | 1 | 0 |"
+
+
 def test_whole_process_peak_memory_is_the_processs_own(tmp_path):
     """A command's peak memory is its own, not that of the (large) process that measures it."""
     from workcal_wb.core.benchmark.processes import PYTHON, timed

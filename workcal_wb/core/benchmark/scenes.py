@@ -26,6 +26,7 @@ import numpy as np
 from .. import frames
 from ..simulate.cell import CellSpec, cell_scan
 from ..simulate.upright_l import UprightLSpec, upright_l_scan
+from .costs import cost_lines
 
 SCENES_PER_VARIANT = 5
 FOUND_DEG, FOUND_MM = 0.3, 0.3
@@ -81,6 +82,7 @@ class SceneRow:
     displacement_mm: float
     time_s: float
     reason: str
+    codes: tuple = ()  # every reason's code, in order
 
     @property
     def right(self) -> bool:
@@ -122,7 +124,7 @@ def scene_row(variant: str, spec: CellSpec, bunny_folder: Path | None, seed: int
         displacement = float(np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model), axis=1).max())
     reason = str(result.reasons[0])[:90] if result.reasons else ""
     return SceneRow(variant, f"{variant} #{spec.seed}", len(cell.cloud), result.status, rotation, displacement,
-                    elapsed, reason)
+                    elapsed, reason, tuple(r.code for r in result.reasons))
 
 
 def goals(rows: list, goal_found: float | None = GOAL_FOUND, label: str = "scenes") -> list[str]:
@@ -175,7 +177,7 @@ def table(rows: list, seed: int, where: str = "in this process", upright_l: bool
     wanted = f", goal {goal_found:.0%}" if goal_found is not None else ""
     lines += ["", f"Goals: W found in {found} of {len(rows)} scenes ({found / max(len(rows), 1):.0%}{wanted}); "
               f"wrong W reported ok: {sum(r.outcome == 'wrong' for r in rows)} (goal 0)."
-              + (" Missed: " + "; ".join(missed) if missed else ""), "",
+              + (" Missed: " + "; ".join(missed) if missed else ""), "", *cost_lines(rows),
               "Per scene:", "",
               "| scene | points | status | rot. err (deg) | disp. (mm) | time (s) | first reason |",
               "|---|---|---|---|---|---|---|"]

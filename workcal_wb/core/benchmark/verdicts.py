@@ -24,6 +24,7 @@ from .. import frames, pointops
 from ..geometry import Cloud
 from ..result import SYMMETRIC
 from .cases import BUNNY_SCANS, bunny_reference_poses, random_motion
+from .costs import cost_lines
 
 DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
 RIGHT_MM = 1.0
@@ -55,6 +56,7 @@ class VerdictRow:
     status: str
     right: bool
     reason: str  # the first reason, shortened
+    codes: tuple = ()  # every reason's code, in order
 
 
 def dragon_scans(folder: Path = DRAGON_FOLDER) -> dict:
@@ -216,7 +218,8 @@ def judge_cases(cases: list[VerdictCase], seed: int) -> list[VerdictRow]:
         result = match(Cloud(case.scan, name=case.name), surface, tolerance_mm=case.tolerance_mm, seed=seed)
         rows.append(VerdictRow(case.name, case.group, len(case.scan), case.tolerance_mm, result.noise_mm,
                                len(surface.symmetry_orders) > 0, result.status,
-                               right(surface, result.matrix, case.truth), _short(result.reasons)))
+                               right(surface, result.matrix, case.truth), _short(result.reasons),
+                               tuple(r.code for r in result.reasons)))
     return rows
 
 
@@ -268,6 +271,7 @@ def table(rows: list[VerdictRow], seed: int) -> tuple[str, list]:
                   ": " + ", ".join(r.case for r in wrong_ok) if wrong_ok else ""),
               f"- right poses of parts without symmetry, at a tolerance above the scan's noise, not reported \"ok\": "
               f"**{len(missed)} of {len(eligible)}** (goal 0)", ""]
+    lines += cost_lines(rows)
     if missed:
         lines += ["Those cases and why:", "",
                   "| case | points | status | first reason |", "|---|---|---|---|"]
