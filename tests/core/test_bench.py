@@ -265,6 +265,9 @@ def test_the_l_block_on_its_foot_section_has_its_hundred_scenes_and_counts_a_wro
             SceneRow("0.1 mm noise", "0.1 mm noise #1", 1000, "ambiguous", 180.0, 400.0, 5.0, "a rival")]
     text = table(rows, 0, upright_l=True)
     assert text.startswith("## L-block on its foot\n") and "| **all** | 2 | 0 | 1 | 0 | 1 | 4.0 | 5.0 |" in text
+    covered = [SceneRow("v", f"v #{i}", 1000, "ok", 0.01, error, 3.0, "", (), 0.1) for i, error in enumerate((0.05, 0.2))]
+    assert "covers the true error (largest displacement of a workpiece model point) in **1 of 2** scenes" in table(
+        covered, 0)
     assert goals(rows, None, "L-block on its foot") == [
         "L-block on its foot: a wrong W reported ok in 1 scene(s): 0.1 mm noise #0"]
     row = scene_row("0.1 mm noise", scenes[2], None, 0)
