@@ -114,7 +114,8 @@ def test_a_mutated_gcode_file_gives_a_toolpath_or_a_workcal_error(folder):
 HOSTILE = ["\n", "\r", "\r\n", "\x00", "\x0b", "\x0c", "\x1c", "\x1e", "\x7f", "\x85", "\u2028", "\t", ";", "(", ")",
            "%", '"', "'", "\\", "[", "]", "{", "}", "&", "!", "#", "/END", "FOLD PTP HIDDEN", "ENDFOLD", ";FOLD",
            "G0 X0 Y0 Z-500", "LIN {X 0, Y 0, Z -500, A 0, B 0, C 0}", "1,linear,9999,9999,-500,1,0,0,0,0,0,0,1,1",
-           "MoveL [[0,0,-500],[1,0,0,0]]", 'movel(p[0,0,-0.5,0,0,0])', "L P[1] 100mm/sec FINE ;", "M30", "é"]
+           "MoveL [[0,0,-500],[1,0,0,0]]", 'movel(p[0,0,-0.5,0,0,0])', "L P[1] 100mm/sec FINE ;", "M30", "é",
+           "\uff1b", "\u037e", "\uff08", "\uff09", "\uff05", "\uff3b", "\uff3d", "\uff02", "\uff3c"]
 TEXT = st.lists(st.one_of(st.sampled_from(HOSTILE), st.text(max_size=6)), min_size=1, max_size=6).map("".join)
 
 
@@ -160,5 +161,7 @@ def test_no_text_from_outside_writes_into_a_program(folder):
             assert_poses(PARSERS[fmt](text), plain)
         if fmt == "krl":
             assert not any(re.match(r"\s*;\s*(END)?FOLD", line, re.I) for line in text.split("\n")), text
+        if fmt == "fanuc":  # a remark holds no ';' (it ends a TP line)
+            assert all(line.count(";") == 1 for line in text.split("\n") if re.match(r"\s*\d+:\s*!", line)), text
 
     write()

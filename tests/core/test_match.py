@@ -173,9 +173,9 @@ def test_planar_and_line_scans_fail_with_the_cause(car):
     u, v = np.meshgrid(np.linspace(0, 100, 40), np.linspace(0, 80, 40))
     plane = np.column_stack([u.ravel(), v.ravel(), 0.01 * np.random.default_rng(0).normal(size=u.size)])
     line = np.column_stack([np.linspace(0, 200, 500), np.zeros(500), np.zeros(500)])
-    for points, kind in ((plane, "planar"), (line, "linear")):
+    for points, words in ((plane, "lie on a plane"), (line, "lie on a line")):
         reason = match(Cloud(points), surface).reasons[0]
-        assert reason.code == SCAN_NOT_SOLID and kind in str(reason)
+        assert reason.code == SCAN_NOT_SOLID and words in str(reason)
     assert match(Cloud(plane), surface).status == "failed"
 
 

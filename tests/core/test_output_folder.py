@@ -283,7 +283,7 @@ KILLED_COMMIT = """
 import os, shutil, signal, sys
 sys.path.insert(0, {root!r})
 from workcal_wb.core.outputs import OutputFolder
-steps, limit = [0], int(sys.argv[1])
+steps, limit = [0], {limit}
 
 def counted(operation):
     def step(*args, **kwargs):
@@ -319,8 +319,8 @@ def test_a_commit_killed_at_any_step_leaves_a_whole_set_or_none_a_reader_takes(t
             for name, text in first.items():
                 outputs.file(name).write_text(text)
             outputs.commit("ok")
-        script = KILLED_COMMIT.format(root=str(ROOT), folder=str(folder), owned=OWNED, files=second)
-        done = subprocess.run([sys.executable, "-c", script, str(limit)], capture_output=True, text=True)
+        script = KILLED_COMMIT.format(root=str(ROOT), folder=str(folder), owned=OWNED, files=second, limit=limit)
+        done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
         outputs = sorted(p.name for p in folder.iterdir() if p.name != "manifest.json" and not p.name.startswith("."))
         if (folder / "manifest.json").exists():
             listed = json.loads((folder / "manifest.json").read_text())["files"]

@@ -256,3 +256,20 @@ def test_comments_are_carried_into_robot_programs(path, tmp_path):
     out = tmp_path / "prog.src"
     export(path, calibration(), "krl", out)
     assert ";plunge" in out.read_text() and ";test part" not in out.read_text().split("DEF")[1]
+
+
+def test_a_spindle_speed_of_any_size_is_written_as_a_number_the_reader_takes_back(tmp_path):
+    """S1000000 was written S1e+06 (read back as an E word)."""
+    path = parse_gcode("G0 X0 Y0 Z20\nS1000000 M3\nG1 Z-1 F300\nS2500.5\nG1 X5\n", "part.nc")
+    out = tmp_path / "prog.nc"
+    export(path, calibration(), "gcode", out, machine="5axis-tcp")
+    again = read_gcode(out)
+    assert [e.number for e in again.events if e.kind == "spindle"] == [1000000.0, 2500.5]
+
+
+@pytest.mark.parametrize("name", ["wobjWorkCal.mod", "TWORKCAL1.mod", "vWorkCal1.mod", "fine.mod", "z50.mod",
+                                  "workcal_tcp_1.script"])
+def test_a_program_named_like_data_it_declares_is_refused(name, path, tmp_path):
+    with pytest.raises(InputError, match="a name the program declares itself"):
+        export(path, calibration(), "rapid" if name.endswith(".mod") else "urscript", tmp_path / name)
+    assert not (tmp_path / name).exists()

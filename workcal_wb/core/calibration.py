@@ -74,7 +74,7 @@ REFIT_THREADS = 2
 DRAWN_AT_ONCE = 8
 # Scans of one scene taken in the same units have extents within this factor of each other.
 UNIT_MISMATCH_RATIO = 8.0
-# The largest tolerance (a share of the smaller model's diagonal) a calibration can be checked to: past
+# The largest tolerance (a share of the larger model's diagonal) a calibration can be checked to: past
 # it a model several percent the wrong size, or a pose a few degrees off, passes every gate.
 MAX_TOLERANCE_OF_SIZE = 0.05
 # A toolpath works on the part: its median distance to the model surface, as a fraction of the model
@@ -124,10 +124,10 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     report(0.0, "preparing the models")
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, options.seed) for m in (workpiece, reference)]
     workpiece_surface, reference_surface = surfaces
-    smaller = min(surfaces, key=lambda s: s.diagonal)
-    if options.tolerance_mm > MAX_TOLERANCE_OF_SIZE * smaller.diagonal:
-        raise InputError(f"tolerance {options.tolerance_mm:g} mm is {100 * options.tolerance_mm / smaller.diagonal:.0f} % "
-                         f"of the size of {smaller.name} (diagonal {smaller.diagonal:.1f} mm): at most "
+    larger = max(surfaces, key=lambda s: s.diagonal)  # the smaller may be in another unit: said where it is located
+    if options.tolerance_mm > MAX_TOLERANCE_OF_SIZE * larger.diagonal:
+        raise InputError(f"tolerance {options.tolerance_mm:g} mm is {100 * options.tolerance_mm / larger.diagonal:.0f} % "
+                         f"of the size of {larger.name} (diagonal {larger.diagonal:.1f} mm): at most "
                          f"{100 * MAX_TOLERANCE_OF_SIZE:.0f} %, or a model several percent the wrong size passes; "
                          "give the tolerance the machining needs (mm)")
     if toolpath_points is not None:

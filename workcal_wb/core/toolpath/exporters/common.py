@@ -328,7 +328,8 @@ def program_name(job: ExportJob, max_len: int, must_match_file: bool = False, re
         raise InputError(f"{job.out}: the file name must be a valid program name (a letter, then letters, digits or _, "
                          f"at most {max_len} characters), e.g. {name}{job.out.suffix}")
     if name.upper() in reserved:
-        raise InputError(f"{job.out}: {name} is a reserved word of the robot language; choose another file name")
+        raise InputError(f"{job.out}: {name} is a reserved word of the robot language or a name the program "
+                         "declares itself; choose another file name")
     return name
 
 

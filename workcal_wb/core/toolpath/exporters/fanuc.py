@@ -38,7 +38,7 @@ def positions_text(rotation, position, tools, config: str) -> list[str]:
 
 def remarks(text: str) -> list[str]:
     """Remark instructions of at most REMARK_WIDTH characters; ';' ends a TP line, so none inside."""
-    return [f"! {piece} ;" for piece in common.wrapped([text.replace(";", ",")], REMARK_WIDTH)]
+    return [f"! {piece} ;" for piece in common.wrapped([common.comment_text(text).replace(";", ",")], REMARK_WIDTH)]
 
 
 def _event_lines(event) -> list[str]:

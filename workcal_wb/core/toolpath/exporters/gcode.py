@@ -19,7 +19,7 @@ from .. import orientation
 from ..gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES, gcode_comment
 from ..model import (ARC_CCW, ARC_CW, COOLANT, DWELL, FIRST_ARC_CODE, KINDS, LENGTH_OFFSET, SPINDLE, STOP,
                      TOOL_CHANGE)
-from ..safety import check_vertical, numbers, writable
+from ..safety import check_vertical, number, numbers, writable
 from ..transform import transformed
 from . import common
 
@@ -47,7 +47,7 @@ def _event_blocks(event, machine: str) -> list[str]:
         return ["G49"] if n is None else []  # G43 H goes into a Z move: _length_offsets
     if event.kind == SPINDLE:
         code = {"cw": "M3", "ccw": "M4", "off": "M5"}[event.code]
-        return [code if n is None or code == "M5" else f"S{n:g} {code}"]
+        return [code if n is None or code == "M5" else f"S{number(n, 3).rstrip('0').rstrip('.')} {code}"]
     if event.kind == COOLANT:
         return [{"mist": "M7", "flood": "M8", "off": "M9"}[event.code]]
     if event.kind == DWELL:

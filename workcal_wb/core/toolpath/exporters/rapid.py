@@ -27,6 +27,11 @@ RESERVED = set("""ALIAS AND BACKWARD CASE CONNECT CONST DEFAULT DIV DO ELSE ELSE
     ENDPROC ENDRECORD ENDTEST ENDTRAP ENDWHILE ERROR EXIT FALSE FOR FROM FUNC GOTO IF INOUT LOCAL MOD MODULE NOSTEPIN
     NOT NOVIEW OR PERS PROC RAISE READONLY RECORD RETRY RETURN STEP SYSMODULE TEST THEN TO TRAP TRUE TRYNEXT UNDO VAR
     VIEWONLY WHILE WITH XOR MAIN""".split())
+# RAPID's predefined data (a routine may not share a data object's name): zones, speeds, the default
+# tool, work object and load.
+PREDEFINED = set("""FINE Z0 Z1 Z5 Z10 Z15 Z20 Z30 Z40 Z50 Z60 Z80 Z100 Z150 Z200 V5 V10 V20 V30 V40 V50 V60 V80 V100
+    V150 V200 V300 V400 V500 V600 V800 V1000 V1500 V2000 V2500 V3000 V4000 V5000 V6000 V7000 VMAX TOOL0 WOBJ0
+    LOAD0""".split())
 
 
 def tool_name(number: int) -> str:
@@ -73,11 +78,12 @@ def _module(name: str, head: list[str], data: list[str], body: list[str]) -> str
 
 def render(job: common.ExportJob):
     """The main module (and its part modules, when over the line limit)."""
-    name = common.program_name(job, MAX_NAME, reserved=RESERVED)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
     first_tool = common.first_tool(path)
     speed_names = {f: f"vWorkCal{i}" for i, f in enumerate(dict.fromkeys(path.feed.tolist()), start=1)}
+    declared = {WOBJ, ZONE, *speed_names.values(), *map(tool_name, tools)}
+    name = common.program_name(job, MAX_NAME, reserved=RESERVED | PREDEFINED | {d.upper() for d in declared})
     notes = ["units: mm, speeds (speeddata v_tcp) in mm/s",
              "angles: orientation quaternions q1..q4 = w, x, y, z (ABB order, unit length)",
              f"positions: workpiece frame X, in work object {WOBJ}: uframe = {common.placement_name(job)}, "

@@ -70,9 +70,9 @@ def blend_radii_m(position: np.ndarray, stops) -> np.ndarray:
 
 
 def render(job: common.ExportJob):
-    name = common.program_name(job, MAX_NAME, reserved=RESERVED)
     path = common.robot_path(job, in_base_frame=False, max_speed_mm_s=MAX_SPEED_MM_S)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
+    name = common.program_name(job, MAX_NAME, reserved=RESERVED | {tcp_name(t).upper() for t in tools})
     first_tool = common.first_tool(path)
     events = common.events_by_move(path.events, len(path))
     notes = ["units: METRES and RADIANS (URScript), speeds v in m/s, acceleration a in m/s^2",
