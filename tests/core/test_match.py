@@ -298,9 +298,9 @@ def test_a_match_is_ok_only_as_a_calibration_gate_would_pass_its_region(amplitud
 def test_a_fit_worse_than_the_noise_asks_more_standard_errors_of_a_rival():
     """The car whose surface waves 1 mm against its model, matched to a 1 mm tolerance: the fit is
     several times its 0.05 mm noise, so a rival must be more standard errors behind the best than
-    rival_significance (3) to be ruled out, by as many times (as a least-squares fit's standard
-    errors stretch with its residual); a pose 3.2 behind is then a rival, by the view and by the
-    points it leaves far off."""
+    rival_significance (3) to be ruled out, by as many times as the fit is past twice the noise (as a
+    least-squares fit's standard errors stretch with its residual); a pose 3.2 behind is then a rival,
+    by the view and by the points it leaves far off."""
     from workcal_wb.core.match import MatchOptions, _mark_rivals
 
     mesh, scan, truth = _warped_car_scan(1.0)

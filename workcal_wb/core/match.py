@@ -1194,11 +1194,12 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, ranke
     failures = _failures(fit, judge, view, options, T)
     if not failures:
         judge.weigh_far_off(ranked)
-    # A fit worse than the noise leaves structure in the residuals that the cells' spread does not see
-    # (the part differs from its model, the sensor has its own): the standard errors are stretched by
-    # that ratio, as a least-squares fit's are by the square root of its reduced chi-square.
+    # A fit worse than FAR_OFF_FIT noises (what is taken as explaining the scan to its noise) leaves
+    # structure in the residuals that the cells' spread does not see (the part differs from its model,
+    # the sensor has its own): the standard errors are stretched by the excess, as a least-squares
+    # fit's are by the square root of its reduced chi-square.
     fit_to_noise = fit.sigma / max(judge.noise, 1e-9)
-    view["required_standard_errors"] = options.rival_significance * max(1.0, fit_to_noise)
+    view["required_standard_errors"] = options.rival_significance * max(1.0, fit_to_noise / FAR_OFF_FIT)
     _mark_rivals(ranked, fit_to_noise <= FAR_OFF_FIT, view["required_standard_errors"], options)
     doubts = [] if failures else _doubts(ranked, surface, judge, view, stab, options, T)
     status = FAILED if failures else AMBIGUOUS if doubts else OK
@@ -1421,7 +1422,7 @@ def _stretched_words(view: dict, options: MatchOptions) -> str:
     """Why more standard errors than ``rival_significance`` are asked, for a rival's reason."""
     if view["required_standard_errors"] <= options.rival_significance:
         return ""
-    ratio = view["required_standard_errors"] / options.rival_significance
+    ratio = FAR_OFF_FIT * view["required_standard_errors"] / options.rival_significance
     return (f" (the model explains the scan only to {ratio:.1f} times its noise: the part differs from its "
             "model, or the sensor has structure of its own)")
 
