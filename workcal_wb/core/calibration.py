@@ -126,8 +126,9 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     workpiece_surface, reference_surface = surfaces
     larger = max(surfaces, key=lambda s: s.diagonal)  # the smaller may be in another unit: said where it is located
     if options.tolerance_mm > MAX_TOLERANCE_OF_SIZE * larger.diagonal:
-        raise InputError(f"tolerance {options.tolerance_mm:g} mm is {100 * options.tolerance_mm / larger.diagonal:.0f} % "
-                         f"of the size of {larger.name} (diagonal {larger.diagonal:.1f} mm): at most "
+        raise InputError(f"tolerance {options.tolerance_mm:g} mm is "
+                         f"{100 * options.tolerance_mm / larger.diagonal:.0f} % of the size of {larger.name} "
+                         f"(diagonal {larger.diagonal:.1f} mm): at most "
                          f"{100 * MAX_TOLERANCE_OF_SIZE:.0f} %, or a model several percent the wrong size passes; "
                          "give the tolerance the machining needs (mm)")
     if toolpath_points is not None:
@@ -229,7 +230,8 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
             "Only a reference that shows that strain can check the scanner: scan it so that two parallel faces "
             "show along each direction (an L-block's inner faces as well as its outer ones)")
     off_model = {role: _off_model(scan, region_idx[role], surface, m)
-                 for role, surface, m in (("workpiece", workpiece_surface, U_match), ("reference", reference_surface, V_match))}
+                 for role, surface, m in (("workpiece", workpiece_surface, U_match),
+                                          ("reference", reference_surface, V_match))}
     gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm, off_model)
     status, reasons = _status(U_match, V_match, gates)
     report(1.0, f"calibration {status}")
@@ -536,8 +538,8 @@ def _status(U_match: MatchResult, V_match: MatchResult, gates: list) -> tuple[st
     reasons = [r.within(f"{role} match", role) for role, m in (("workpiece", U_match), ("reference", V_match))
                for r in m.reasons]
     numeric_failures = [g for g in gates if not g["passed"] and g["unit"]]
-    reasons += [Reason(g["code"], f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} {g['unit']}"
-                       + (f"; {g['why']}" if "why" in g else "")) for g in numeric_failures]
+    reasons += [Reason(g["code"], f"{g['name']} {g['value']:.3f} {g['unit']} is outside the limit {g['limit']} "
+                                  f"{g['unit']}" + (f"; {g['why']}" if "why" in g else "")) for g in numeric_failures]
     if FAILED in (U_match.status, V_match.status) or numeric_failures:
         return FAILED, reasons
     if AMBIGUOUS in (U_match.status, V_match.status):

@@ -40,10 +40,10 @@ from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
 from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
-from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE, RMS, WITHIN_TOLERANCE,
-                     NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SCAN_NOT_SOLID,
-                     SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, Candidate, MatchResult,
-                     Reason)
+from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
+                     NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, RMS, SCAN_NOT_SOLID,
+                     SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, WITHIN_TOLERANCE,
+                     Candidate, MatchResult, Reason)
 from .stability import gelfand, stability
 from .surface import SurfaceModel
 
@@ -258,8 +258,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     pointops.hand_back_freed_heap()  # the whole scan's checks are done: their temporaries would stay resident
     if kind != "solid":
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
-                           reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; they cannot "
-                                                           "fix a pose")])
+                           reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; "
+                                                           "they cannot fix a pose")])
     fine = pointops.random_subset(scan.points, options.max_fine_points, rng)
     medium = pointops.random_subset(fine, MEDIUM_POINTS, rng)
     probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
@@ -519,7 +519,8 @@ def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate:
     about them.  The verdict tries the turns of its own best again, refined to convergence like it where
     they come near it (Judge._with_turns).
     """
-    return _refined_turns(best, _turns(best, medium, surface, best.sigma <= fit_limit), medium, surface, gate, fit_limit)
+    turned = _turns(best, medium, surface, best.sigma <= fit_limit)
+    return _refined_turns(best, turned, medium, surface, gate, fit_limit)
 
 
 def _turns(best, medium: np.ndarray, surface: SurfaceModel, exact_halves: bool = True) -> np.ndarray:
@@ -550,19 +551,19 @@ def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: Surfac
     turn about an axis a little off (a patch's principal axis, or a model whose legs differ in length)
     lands a centimetre or more from its home and scores as nothing there, and from the search's gate
     it would never slide home; yet from the wide gate a turn that lands home from the search's (a curved
-    tile's flip) may settle elsewhere.  A best that does not fit the scan (its residual scale above ``fit_limit``, the
-    verdict's) is no yardstick for that: its turns are refined from the search's gate where they score
-    RIVAL_FLOOR of it there (a flip the search handed over comes home so)."""
+    tile's flip) may settle elsewhere.  A best that does not fit the scan (its residual scale above
+    ``fit_limit``, the verdict's) is no yardstick for that: its turns are refined from the search's gate
+    where they score RIVAL_FLOOR of it there (a flip the search handed over comes home so)."""
     points = medium[:TURN_POINTS]
     centre = medium.mean(axis=0)
+    best_at_gate = inlier_scores(points, surface, [best.T], gate)[0]
     # Turns that start as one pose end as one (a flip and the exact half turn about the same axis): refine
     # each once.
     if not best.sigma <= fit_limit:
         scores = inlier_scores(points, surface, turned, gate)
         starts = global_search.distinct(turned, scores, centre, TURNS_APART[0], TURNS_APART[1] * surface.diagonal)
-        best_score = inlier_scores(points, surface, [best.T], gate)[0]
         states = [coarse_to_fine([medium], surface, turned[i], gate, surface.spacing)
-                  for i in starts if scores[i] >= RIVAL_FLOOR * best_score]
+                  for i in starts if scores[i] >= RIVAL_FLOOR * best_at_gate]
         return _apart_from(best, states, centre)
     starts = global_search.distinct(turned, np.zeros(len(turned)), centre, TURNS_APART[0],
                                     TURNS_APART[1] * surface.diagonal)
@@ -575,8 +576,8 @@ def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: Surfac
     # A turn that fits at the search's gate is refined from there (it lands home when the part maps onto
     # itself); one that does not, or does not come home, first on a few points from the wide gate: one that
     # then explains much less than the best cannot come close to it on more.
-    screened = inlier_scores(points, surface, turned[starts], gate) >= RIVAL_FLOOR * inlier_scores(
-        points, surface, [best.T], gate)[0] if len(starts) else np.zeros(0, bool)
+    screened = (inlier_scores(points, surface, turned[starts], gate) >= RIVAL_FLOOR * best_at_gate if len(starts)
+                else np.zeros(0, bool))
     states = []
     for i, fits in zip(starts, screened):
         state = coarse_to_fine([medium], surface, turned[i], gate, surface.spacing) if fits else None
@@ -1279,9 +1280,10 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
         reasons.append(Reason(RMS, (
             f"the fit's RMS {fit.rms:.3f} mm is more than the {tolerance:g} mm tolerance: the part differs "
             "from its model by more than the tolerance allows, or the pose is off")))
-    if options.tolerance_gates and fit.within_pct(tolerance) < MIN_WITHIN_TOLERANCE_PCT:
+    within = fit.within_pct(tolerance)
+    if options.tolerance_gates and within < MIN_WITHIN_TOLERANCE_PCT:
         reasons.append(Reason(WITHIN_TOLERANCE, (
-            f"only {fit.within_pct(tolerance):.0f} % of the matched points lie within the {tolerance:g} mm "
+            f"only {within:.0f} % of the matched points lie within the {tolerance:g} mm "
             f"tolerance (at least {MIN_WITHIN_TOLERANCE_PCT:.0f} %): the part differs from its model by more "
             "than the tolerance allows, or the pose is off")))
     if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
@@ -1298,8 +1300,9 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
 def _mark_rivals(ranked: list, best_fits: bool, significance: float, options: MatchOptions) -> None:
     """Mark the Candidates after the best that are rivals: no worse than the best by the view's cells, or
     better by the points they leave far off (by ``significance`` standard errors), or seen from the other
-    side (or scoring ``ambiguity_ratio`` of the best).  The far-off test rules out only a turn of the best refined exactly like it (its flip,
-    tried always; one significantly better by the view's cells, or as good by them and leaving
+    side (or scoring ``ambiguity_ratio`` of the best).  The far-off test rules out only a turn of the best
+    refined exactly like it (its flip, tried always; one significantly better by the view's cells, or as
+    good by them and leaving
     significantly fewer points far off, took the best's place, see Judge._with_turns), and only when both
     it and the best fit the scan within FAR_OFF_FIT noises (``best_fits``, on the verdict's points and on
     the fine ones): a pose refined less (or one that does not fit) can leave points far off by being

@@ -124,8 +124,8 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     on_scan = points[valid]  # the valid points, copied once
     kind = shape_kind(on_scan)
     if kind != "solid":
-        raise NotFound(f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; a scene scan shows the platform and the "
-                       "objects standing on it")
+        raise NotFound(f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; a scene scan shows the platform "
+                       "and the objects standing on it")
     rng = np.random.default_rng(seed)
     spacing = pointops.median_spacing(on_scan, seed=seed)
     warnings = []
@@ -159,12 +159,12 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
         found["workpiece"], found["reference"])
     if ref_touching or wp_touching:  # where they meet, a point goes to the model it lies nearer to
         reference_idx = reference_idx[nearer_own_model(points[reference_idx], (reference, reference_match.matrix),
-                                              (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
+                                                       (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
         # The reference is rigid and unchanged: clay pressed against it lies off its surface.
         within = max(MIN_ON_SURFACE_MM, ON_SURFACE_NOISES * reference_match.noise_mm)
         reference_idx = reference_idx[_on_surface(points[reference_idx], reference, reference_match.matrix, within)]
         workpiece_idx = workpiece_idx[nearer_own_model(points[workpiece_idx], (workpiece, workpiece_match.matrix),
-                                              (reference, reference_match.matrix), near_mm["reference"])]
+                                                       (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
                         f"scan was split between the placed models; each region is only the points nearer its model")
         left = _unexplained(objects, labels, workpiece_idx, reference_idx)
@@ -288,7 +288,7 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
     again = match(cloud, surface, init=found.matrix, **options)
     if again.status == OK and found.status == AMBIGUOUS:
         reasons = found.reasons
-        if not _same_pose(again, found, surface):
+        if not _same_pose(again.matrix, found.matrix, surface):
             turned_deg = frames.rotation_between_deg(again.matrix, found.matrix)
             shift_mm = float(np.linalg.norm(frames.apply(again.matrix, surface.centre)
                                             - frames.apply(found.matrix, surface.centre)))
@@ -319,9 +319,8 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
         result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
         # Back to a pose found before, or to one the search before listed beside its best (a tie two
         # searches settle either way).
-        again = best is not None and result.matrix is not None and any(
-            _same_matrix(result.matrix, np.asarray(U), surface)
-            for U in [best.matrix] + [c.matrix for c in best.candidates[1:]] if U is not None)
+        again = best is not None and any(_same_pose(result.matrix, U, surface)
+                                         for U in [best.matrix] + [c.matrix for c in best.candidates[1:]])
         if best is None or rank(result) > rank(best):
             best = result
         if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
@@ -334,14 +333,11 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
     return best
 
 
-def _same_pose(first: MatchResult, second: MatchResult, surface: SurfaceModel) -> bool:
-    """Whether two matches placed the model alike (within SAME_POSE_DEG and SAME_POSE_DIAGONALS)."""
-    if first.matrix is None or second.matrix is None:
+def _same_pose(a: np.ndarray | None, b: np.ndarray | None, surface: SurfaceModel) -> bool:
+    """Whether two poses (U, None where a match found none) place the model alike (within SAME_POSE_DEG
+    and SAME_POSE_DIAGONALS)."""
+    if a is None or b is None:
         return False
-    return _same_matrix(first.matrix, second.matrix, surface)
-
-
-def _same_matrix(a: np.ndarray, b: np.ndarray, surface: SurfaceModel) -> bool:
     return (frames.rotation_between_deg(a, b) < SAME_POSE_DEG
             and np.linalg.norm(a[:3, 3] - b[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
 

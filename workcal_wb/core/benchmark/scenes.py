@@ -124,7 +124,7 @@ def scene_row(variant: str, spec: CellSpec, bunny_folder: Path | None, seed: int
         model = cell.workpiece_model.points
         displacement = float(np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model), axis=1).max())
     reason = str(result.reasons[0])[:90] if result.reasons else ""
-    bound = result.uncertainty.get("surface_bound_mm", float("nan")) if isinstance(result.uncertainty, dict) else float("nan")
+    bound = result.uncertainty.get("surface_bound_mm", float("nan"))
     return SceneRow(variant, f"{variant} #{spec.seed}", len(cell.cloud), result.status, rotation, displacement,
                     elapsed, reason, tuple(r.code for r in result.reasons), float(bound))
 

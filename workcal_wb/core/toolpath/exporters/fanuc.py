@@ -49,7 +49,7 @@ def _event_lines(event) -> list[str]:
     if act.tool is not None:
         lines.append(f"UTOOL_NUM={act.tool} ;")
     if act.stop:
-        message = common.comment_text(act.message).replace(";", ",").replace("[", "(").replace("]", ")")
+        message = act.message.replace(";", ",").replace("[", "(").replace("]", ")")  # one line already (action)
         lines += [f"MESSAGE[{message[:MESSAGE_WIDTH]}] ;", "PAUSE ;"]
     return lines
 

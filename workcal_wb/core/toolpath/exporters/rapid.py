@@ -59,7 +59,7 @@ def _moves(path, speed_names: dict, first_tool: int):
         return [f"    {kind} [{targets[i][1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
                 f"{zone}, {tool_name(tools[i])}\\WObj:={WOBJ};"]
 
-    return common.move_groups(path, _event_lines, lambda c: f"    ! {common.comment_text(c)}", move)
+    return common.move_groups(path, _event_lines, lambda c: f"    ! {c}", move)
 
 
 def _event_lines(event) -> list[str]:
