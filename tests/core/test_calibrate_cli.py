@@ -1,6 +1,7 @@
 """`python3 -m workcal_wb calibrate` and `demo` from files, as a user runs them."""
 import hashlib
 import json
+import re
 
 import numpy as np
 import pytest
@@ -8,7 +9,8 @@ import pytest
 from workcal_wb.cli import main
 from workcal_wb.cli.simulate import write_simulation
 from workcal_wb.core import frames
-from workcal_wb.core.toolpath import read_gcode
+from workcal_wb.core.toolpath import Move, Toolpath, read_gcode
+from workcal_wb.core.toolpath.exporters.gcode import format_gcode
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +43,26 @@ def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path
     digest = hashlib.sha256((tmp_path / "result.json").read_bytes()).hexdigest()[:16]
     assert f"result sha256 {digest}" in program
     assert f"bound {result['uncertainty']['toolpath_bound_mm']} mm" in program
+    assert re.search(r"on the workpiece model workpiece.ply: cutting moves a median \d\.\d\d mm from its surface",
+                     re.sub(r"\)\n\(", " ", program))
     assert "calibration OK" in capsys.readouterr().out
+
+
+def test_a_toolpath_made_for_another_part_is_not_written(scene_files, tmp_path, capsys):
+    """A larger variant's toolpath: this one's pass 40 mm off the part's surface (close enough to pass as
+    the same part's in the model's unit and frame, too far for any cut on it)."""
+    folder, _ = scene_files
+    path = read_gcode(folder / "toolpath.nc")
+    lifted = Toolpath.from_moves([Move(m.kind, m.end + 40 * m.tool_axis, feed=m.feed, tool_axis=m.tool_axis)
+                                  for m in path.moves])
+    (tmp_path / "other.nc").write_text(format_gcode(lifted))
+    out = tmp_path / "out"
+    assert main(_args(folder, out, "--toolpath", str(tmp_path / "other.nc"), "--machine", "5axis-tcp")) == 1
+    assert json.loads((out / "result.json").read_text())["status"] == "ok"
+    err = capsys.readouterr().err
+    assert re.search(r"toolpath not written: .*other.nc: its cutting moves run a median [\d.]+ mm from the workpiece "
+                     r"model workpiece.ply .* allow it with --path-reach \d+", err)
+    assert not list(out.glob("toolpath_calibrated.*"))
 
 
 def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):

@@ -133,7 +133,7 @@ def test_vertices_no_face_uses_are_dropped_with_a_warning():
     from workcal_wb.core.surface import SurfaceModel
 
     square = np.array([[0, 0, 0], [100, 0, 0], [100, 100, 0], [0, 100, 0], [0, 0, 100]], float)
-    with pytest.raises(InputError, match="square.stl: the model is planar"):
+    with pytest.raises(InputError, match="square.stl: the model has its points on a plane"):
         SurfaceModel(Cloud(square, triangles=np.array([(0, 1, 2), (0, 2, 3)]), name="square.stl"))
     box = SurfaceModel(Cloud(CORNERS, triangles=np.array(FACES), name="box.ply"))
     faces = np.array(FACES)

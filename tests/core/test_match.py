@@ -322,3 +322,10 @@ def test_a_scan_of_denormal_numbers_is_said_to_lie_at_one_point():
     result = match(scan, SurfaceModel(shapes.sphere(), 0))
     assert result.status == "failed" and codes(result.reasons) == [SCAN_NOT_SOLID]
     assert "tiny.xyz: the scan points lie all at one point (or within a nanometre of it)" in result.reasons[0].text
+
+
+def test_a_model_of_denormal_numbers_is_said_to_lie_at_one_point():
+    model = Cloud(np.random.default_rng(0).normal(size=(500, 3)) * 1e-310, name="tiny.xyz")
+    with pytest.raises(InputError, match=r"tiny.xyz: the model has its points all at one point \(or within a "
+                                         r"nanometre of it\); a pose cannot be fitted to it"):
+        SurfaceModel(model)

@@ -1,6 +1,7 @@
 """``python3 -m workcal_wb toolpath``: exit codes, messages, options (run in-process)."""
 import csv
 import json
+import math
 import re
 
 import numpy as np
@@ -144,3 +145,30 @@ def test_too_few_lines_per_part_is_refused_naming_the_option(files, capsys):
     assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.src"), "--max-lines", "1") == 2
     assert "argument --max-lines: must be at least 10" in capsys.readouterr().err
     assert not (files / "p.src").exists()
+
+
+def test_a_toolpath_for_the_mirrored_part_is_refused_and_the_right_model_named_in_the_program(files, capsys):
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.simulate.shapes import car_body
+    from workcal_wb.core.simulate.toolpath_sample import sample_toolpath_points
+    from workcal_wb.core.toolpath.exporters.gcode import format_gcode
+    from workcal_wb.core.toolpath.model import Move, Toolpath
+    from workcal_wb.core.writers import write_stl
+
+    body = car_body(edge_mm=4.0)
+    right = Cloud(body.points + [0.0, -300.0, 0.0], None, body.triangles, "right")
+    write_stl(files / "right.stl", right)
+    write_stl(files / "left.stl", Cloud(right.points * [1.0, -1.0, 1.0], None, right.triangles[:, ::-1], "left"))
+    points, feed = sample_toolpath_points(right, rows=8, points_per_row=32)
+    path = Toolpath.from_moves([Move("rapid", points[0] + [0, 0, 20])] + [Move("linear", p, feed=feed) for p in points])
+    (files / "door.nc").write_text(format_gcode(path))
+    out = files / "door.src"
+    args = ["toolpath", "--in", str(files / "door.nc"), "--calibration", str(files / "ok.json"), "--out", str(out)]
+    assert main([*args, "--workpiece", str(files / "left.stl")]) == 1
+    err = capsys.readouterr().err
+    median = float(re.search(r"run a median ([\d.]+) mm from the workpiece model left.stl", err).group(1))
+    assert median > 400 and re.search(r"allow it with --path-reach \d+$", err.strip()) and not out.exists()
+    assert main([*args, "--workpiece", str(files / "right.stl")]) == 0
+    assert re.search(r"on the workpiece model right.stl: cutting moves a median \d\.\d\d mm", out.read_text().replace("\n;", " "))
+    assert main(args) == 0 and "not checked (no model given)" in out.read_text()
+    assert main([*args, "--workpiece", str(files / "left.stl"), "--path-reach", str(math.ceil(median * 1.2))]) == 0

@@ -157,3 +157,67 @@ def test_non_finite_quality_numbers_are_written_as_n_a(path, tmp_path):
     export(path, result, "csv", out)
     text = out.read_text().lower()
     assert "gate rms_mm = n/a mm, limit 0.3: passed" in text and "bound n/a mm" in text and "nan" not in text
+
+
+def _right_hand_part():
+    """A part on the right of a car (its frame X the car's, y to the left) and a finishing pass 1 mm above
+    its top, as CAM makes it on the part's model."""
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.simulate.shapes import car_body
+    from workcal_wb.core.simulate.toolpath_sample import sample_toolpath_points
+
+    body = car_body(edge_mm=4.0)
+    model = Cloud(body.points + [0.0, -300.0, 0.0], None, body.triangles, "right_door.stl")
+    points, feed = sample_toolpath_points(model, rows=8, points_per_row=32)
+    moves = [Move("rapid", points[0] + [0, 0, 20])] + [Move("linear", p, feed=feed) for p in points]
+    return model, Toolpath.from_moves(moves + [Move("rapid", points[-1] + [0, 0, 20])], source="right_door.nc")
+
+
+def test_a_toolpath_made_for_the_mirrored_part_is_refused_with_its_distance(tmp_path):
+    from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.toolpath.safety import PathOffModel
+
+    right, toolpath = _right_hand_part()
+    left = Cloud(right.points * [1.0, -1.0, 1.0], None, right.triangles[:, ::-1], "left_door.stl")
+    out = tmp_path / "prog.src"
+    with pytest.raises(PathOffModel) as refused:
+        export(toolpath, calibration(), "krl", out, workpiece_model=left)
+    assert refused.value.median_mm > 400 and "left_door.stl" in str(refused.value)
+    assert f"a median {refused.value.median_mm:.1f} mm from the workpiece model" in str(refused.value)
+    assert not out.exists()
+    # the right model: written, and the header says how the path lies on it
+    export(toolpath, calibration(), "krl", out, workpiece_model=right)
+    header = out.read_text().replace("\n;", " ")  # the header's comment lines wrapped
+    assert re.search(r"on the workpiece model right_door.stl: cutting moves a median [12]\.\d\d mm from its "
+                     r"surface, 100 % within the reach 25 mm", header)
+
+
+def test_a_roughing_pass_inside_the_part_is_within_reach_and_a_path_far_off_only_with_a_larger_reach(tmp_path):
+    from workcal_wb.core.toolpath.safety import PathOffModel
+
+    model, toolpath = _right_hand_part()
+    inside = Toolpath.from_moves([Move(m.kind, m.end - [0, 0, 16.0], feed=m.feed) for m in toolpath.moves],
+                                 source="roughing.nc")
+    export(inside, calibration(), "krl", tmp_path / "rough.src", workpiece_model=model)
+    aside = Toolpath.from_moves([Move(m.kind, m.end + [0, 0, 60.0], feed=m.feed) for m in toolpath.moves],
+                                source="aside.nc")
+    with pytest.raises(PathOffModel):
+        export(aside, calibration(), "krl", tmp_path / "aside.src", workpiece_model=model)
+    export(aside, calibration(), "krl", tmp_path / "aside.src", workpiece_model=model, path_reach_mm=80.0)
+    assert "within the reach 80 mm" in (tmp_path / "aside.src").read_text()
+
+
+def test_the_path_is_measured_along_its_cutting_moves_only():
+    from workcal_wb.core.toolpath.safety import cutting_points
+
+    moves = [Move("rapid", (0, 0, 100)), Move("linear", (0, 0, 0), feed=100), Move("linear", (100, 0, 0), feed=100),
+             Move("rapid", (100, 0, 500)), Move("rapid", (5000, 0, 500))]
+    points = cutting_points(Toolpath.from_moves(moves), 0.01, count=100)
+    # half of the cut is the plunge from z 100, half the pass along x; the rapids add nothing
+    assert len(points) == 100 and np.all(points[:, 0] <= 100) and np.all(points[:, 1] == 0)
+    assert np.isclose(np.mean(points[:, 2] > 0), 0.5, atol=0.02) and np.allclose(np.diff(points[50:, 0]), 2.0)
+
+
+def test_without_a_model_the_program_says_the_path_was_not_checked(path, tmp_path):
+    export(path, calibration(), "rapid", tmp_path / "prog.mod")
+    assert "toolpath on the workpiece model: not checked (no model given)" in (tmp_path / "prog.mod").read_text()

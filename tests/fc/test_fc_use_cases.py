@@ -16,7 +16,9 @@ from workcal_wb.core.result import CalibrationResult  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath  # noqa: E402
-from workcal_wb.core.toolpath import CalibrationNotOk, ToolTilted, format_gcode, linearised, read_gcode  # noqa: E402
+from workcal_wb.core.toolpath import (CalibrationNotOk, Move, ToolTilted, Toolpath, format_gcode, linearised,  # noqa: E402
+                                      read_gcode)
+from workcal_wb.core.toolpath.safety import PathOffModel  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
 from workcal_wb.fc import proxies, regions, report, setup, toolpath  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
@@ -82,6 +84,20 @@ def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
     assert job.machine == "5axis-tcp" and out.exists()
     np.testing.assert_allclose(read_gcode(out, rotary="ac").points(), frames.apply(matrix_of(cal.W), expected),
                                atol=1e-3)
+    assert "on the workpiece model Workpiece: cutting moves a median" in out.read_text().replace(")\n(", " ")
+    # Another part's toolpath (its pass 40 mm off this part's surface) is refused by both, naming the model.
+    chosen = read_gcode(scene["gcode"])
+    other = tmp_path / "other.nc"
+    other.write_text(format_gcode(Toolpath.from_moves([Move(m.kind, m.end + 40 * m.tool_axis, feed=m.feed,
+                                                            tool_axis=m.tool_axis) for m in chosen.moves])))
+    before = names(doc)
+    with pytest.raises(PathOffModel, match="from the workpiece model Workpiece"):
+        toolpath.make_calibrated_path(cal, source=str(other))
+    assert names(doc) == before
+    with pytest.raises(PathOffModel) as refused:
+        toolpath.export_program(cal, tmp_path / "other_calibrated.nc", "gcode", source=str(other),
+                                machine="5axis-tcp", rotary="ac")
+    assert 35 < refused.value.median_mm < 45 and not (tmp_path / "other_calibrated.nc").exists()
 
 
 def test_a_calibration_that_is_not_ok_refuses_the_calibrated_toolpath(doc, scene):

@@ -62,3 +62,32 @@ def test_prepared_models_preferences_are_set_on_the_page_and_followed(doc, tmp_p
         for name, value in saved.items():
             prefs.set(name, value)
         KEPT.clear()
+
+
+def test_the_toolpath_reach_set_on_the_page_is_what_exports_hold_the_toolpath_to(doc):
+    from types import SimpleNamespace
+
+    from workcal_wb.core.toolpath.safety import DEFAULT_PATH_REACH_MM
+    from workcal_wb.fc.toolpath import held_to_workpiece
+    from workcal_wb.gui.commands.preferences import PreferencePage
+
+    calibration = SimpleNamespace(Workpiece=add_model(doc, shapes.peg(), "Peg"))
+    doc.recompute()
+    saved = prefs.all_values()
+    prefs.reset()
+    try:
+        page = PreferencePage()
+        page.loadSettings()
+        assert page.form.pathReach.value() == DEFAULT_PATH_REACH_MM
+        assert held_to_workpiece(calibration)["path_reach_mm"] == DEFAULT_PATH_REACH_MM
+        page.form.pathReach.setValue(80.0)
+        page.saveSettings()
+        held = held_to_workpiece(calibration)
+        assert held["path_reach_mm"] == 80.0 and len(held["workpiece_model"].triangles) > 0
+        again = PreferencePage()
+        again.loadSettings()
+        assert again.form.pathReach.value() == 80.0
+    finally:
+        prefs.reset()
+        for name, value in saved.items():
+            prefs.set(name, value)

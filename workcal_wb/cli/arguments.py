@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import checked_input
@@ -141,3 +142,23 @@ def keep_models(cache) -> None:
     cache.store()
     for note in cache.notes:
         print(f"warning: {note}", file=sys.stderr)
+
+
+UNITS = ("mm", "m", "in")
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
+
+
+def is_cad_file(path) -> bool:
+    """Whether ``path`` is a CAD solid (STEP, IGES, BREP), read only through FreeCAD."""
+    return Path(path).suffix.lower() in CAD_SUFFIXES
+
+
+def read_cad_model(path, units: str):
+    """A STEP/IGES/BREP model as a Cloud, tessellated through FreeCAD when the command runs inside it."""
+    try:
+        from workcal_wb.fc.models import read_model_file
+    except ImportError:
+        raise InputError(f"{path}: STEP/IGES/BREP models are read through FreeCAD; run this command inside "
+                         "freecadcmd (see the README), or export the model as STL") from None
+    return read_model_file(path, units)
+

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import add_cache_options, finite, input_file, keep_models, model_cache, positive, seed
-from workcal_wb.cli.toolpath import add_machine_options, read_options
+from workcal_wb.cli.arguments import (UNITS, add_cache_options, finite, input_file, is_cad_file, keep_models,
+                                      model_cache, positive, read_cad_model, seed)
+from workcal_wb.cli.toolpath import add_machine_options, read_options, way_out
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
@@ -19,8 +20,6 @@ from workcal_wb.core.result import FAILED, OK
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
-UNITS = ("mm", "m", "in")
-CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
 PROGRAM_STEM = "toolpath_calibrated"
 # What a calibration writes into --out; a new run replaces all of it (a program a failed run must not leave too).
 OUTPUTS = ("result.json", "result.regions.npz", "report.html", "report.json", f"{PROGRAM_STEM}.*")
@@ -106,14 +105,9 @@ def read_indices(path, scan_points: int) -> np.ndarray:
 def read_model(path, units: str, cache, seed: int):
     """A model file, prepared (a SurfaceModel, from ``cache`` when it holds it); CAD solids (STEP,
     IGES, BREP) are tessellated through FreeCAD when it is there."""
-    if Path(path).suffix.lower() not in CAD_SUFFIXES:
+    if not is_cad_file(path):
         return cache.model_file(path, units=units, seed=seed, unit_option="--model-units")
-    try:
-        from workcal_wb.fc.models import read_model_file
-    except ImportError:
-        raise InputError(f"{path}: STEP/IGES/BREP models are read through FreeCAD; run this command inside "
-                         "freecadcmd (see the README), or export the model as STL") from None
-    return cache.model(read_model_file(path, units), seed=seed)
+    return cache.model(read_cad_model(path, units), seed=seed)
 
 
 def warn(clouds) -> None:
@@ -142,7 +136,7 @@ def run(args) -> int:
 
         # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
-        refused = _program(args, toolpath, result, outputs)
+        refused = _program(args, toolpath, result, outputs, workpiece)
         outputs.commit(result.status)
         region = result.regions.get("workpiece")
         try:
@@ -162,7 +156,7 @@ def run(args) -> int:
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
 
-def _program(args, toolpath, result, outputs) -> str | None:
+def _program(args, toolpath, result, outputs, workpiece) -> str | None:
     """Stage the calibrated program; the reason when it is refused (or no toolpath was given: None)."""
     if toolpath is None:
         return None
@@ -172,7 +166,8 @@ def _program(args, toolpath, result, outputs) -> str | None:
     try:
         export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
                vertical_tol_deg=args.vertical_tol, rotary=args.rotary, fanuc_config=args.fanuc_config,
-               calibration_source=str(Path(args.out) / "result.json"))
+               calibration_source=str(Path(args.out) / "result.json"), workpiece_model=workpiece,
+               path_reach_mm=args.path_reach)
     except ExportRefused as exc:
-        return str(exc)
+        return f"{exc}{way_out(exc)}"
     return None

@@ -70,7 +70,7 @@ def run(args) -> int:
             try:
                 # the sample scene tilts the part a few degrees: G-code for a 5-axis machine in tool-centre-point mode
                 export(toolpath, result, fmt, staged / name, calibration_source=str(out / "result.json"),
-                       machine="5axis-tcp" if fmt == "gcode" else None)
+                       machine="5axis-tcp" if fmt == "gcode" else None, workpiece_model=workpiece)
                 written.append(name)
             except ExportRefused as exc:
                 print(f"not written: {name}: {exc}")

@@ -2,14 +2,17 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import envelope, finite, input_file, non_negative, positive, program_lines
+from workcal_wb.cli.arguments import (UNITS, envelope, finite, input_file, is_cad_file, non_negative, positive,
+                                      program_lines, read_cad_model)
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
 from workcal_wb.core.outputs import check_file, check_whole_set
+from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, MACHINES, ExportOptions, ExportRefused, RotaryTable,
                                       export, format_for, read_gcode)
@@ -17,7 +20,8 @@ from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN
 from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
 from workcal_wb.core.toolpath.gcode import BLOCK_DELETE, DWELL_P
 from workcal_wb.core.toolpath.orientation import ROTARY
-from workcal_wb.core.toolpath.safety import DEFAULT_FANUC_CONFIG, DEFAULT_VERTICAL_TOL_DEG
+from workcal_wb.core.toolpath.safety import (DEFAULT_FANUC_CONFIG, DEFAULT_PATH_REACH_MM, DEFAULT_VERTICAL_TOL_DEG,
+                                             PathOffModel)
 
 
 def add_parser(subparsers):
@@ -31,6 +35,10 @@ def add_parser(subparsers):
                    help="G-code file (.nc, .ngc, .gcode, ...)")
     p.add_argument("--calibration", required=True, metavar="FILE", type=input_file,
                    help="calibration result JSON (W = ^B X)")
+    p.add_argument("--workpiece", metavar="FILE", type=input_file,
+                   help="the workpiece model X-A the calibration matched: the toolpath is refused when its cutting "
+                        "moves do not run on it (a mirrored or wrong model); without it the program says 'not checked'")
+    p.add_argument("--model-units", choices=UNITS, default="mm", help="units of the --workpiece file (default mm)")
     p.add_argument("--format", choices=list(FORMATS), help="output format (default: from the --out extension)")
     p.add_argument("--out", required=True, metavar="FILE", help="program to write (replaced atomically)")
     p.add_argument("--force", action="store_true",
@@ -66,6 +74,9 @@ def add_machine_options(p) -> None:
                         f"(default {DEFAULT_VERTICAL_TOL_DEG} deg)")
     p.add_argument("--rotary", choices=list(ROTARY), default="ab",
                    help="the machine's two rotary axes, for A/B/C words read and written (default ab)")
+    p.add_argument("--path-reach", type=positive, default=DEFAULT_PATH_REACH_MM, metavar="MM",
+                   help="how far the toolpath's cutting moves may run from the workpiece model's surface, as their "
+                        f"median, before it is taken for another part's toolpath (default {DEFAULT_PATH_REACH_MM:g} mm)")
     p.add_argument("--fanuc-config", default=DEFAULT_FANUC_CONFIG, metavar="'F U T, 0, 0, 0'",
                    help="Fanuc: the robot's configuration at the workpiece (flip, elbow, base side, turns of J1 J4 "
                         f"J6), written on every position; WorkCal has no robot kinematics (default '{DEFAULT_FANUC_CONFIG}')")
@@ -74,6 +85,14 @@ def add_machine_options(p) -> None:
                         "(required when the file has them)")
     p.add_argument("--dwell-p", choices=DWELL_P, default="auto",
                    help="unit of G4 P: auto = milliseconds without a decimal point (Fanuc, Haas), seconds with one")
+
+
+def way_out(refusal: ExportRefused) -> str:
+    """What the command line can do about a refusal the core states without naming options."""
+    if isinstance(refusal, PathOffModel):
+        return (f". If this toolpath is this part's (a roughing pass far into the stock), allow it with --path-reach "
+                f"{math.ceil(refusal.median_mm * 1.2)}")
+    return ""
 
 
 def read_options(args) -> dict:
@@ -98,6 +117,15 @@ def _table(args) -> RotaryTable | None:
     return RotaryTable(frame, args.table_angle or 0.0, source=args.table_frame)
 
 
+def _workpiece(args):
+    """The --workpiece model as a Cloud (None without one)."""
+    if args.workpiece is None:
+        return None
+    if is_cad_file(args.workpiece):
+        return read_cad_model(args.workpiece, args.model_units)
+    return read_cloud(args.workpiece, units=args.model_units, unit_option="--model-units")
+
+
 def run(args) -> int:
     if args.input.lower().endswith(".fcstd"):
         raise InputError(f"{args.input}: FreeCAD documents are read inside FreeCAD (WorkCal workbench); "
@@ -111,13 +139,14 @@ def run(args) -> int:
                             chord_tol_mm=args.chord_tol, krl_mode=args.krl_mode, rapid_feed_mm_min=args.rapid_feed,
                             machine=args.machine, vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
                             max_lines=args.max_lines, fanuc_config=args.fanuc_config,
-                            calibration_source=args.calibration)
+                            calibration_source=args.calibration, workpiece_model=_workpiece(args),
+                            path_reach_mm=args.path_reach)
     for warning in toolpath.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     try:
         job = export(toolpath, calibration, fmt, args.out, options)
     except ExportRefused as exc:
-        print(f"workcal toolpath: refused: {exc}", file=sys.stderr)
+        print(f"workcal toolpath: refused: {exc}{way_out(exc)}", file=sys.stderr)
         return EXIT_FAILED
     if job.forced:
         print(f"workcal toolpath: warning: FORCED export of a {calibration.status!r} calibration", file=sys.stderr)

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from . import pointops
 from .errors import InputError
-from .geometry import Cloud, checked, shape_kind
+from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
 from .visibility import FLAT_DEG, View, median_wall_thickness
 
 # Mesh samples per model diagonal: fine enough that the nearest sample's face is the face under
@@ -347,8 +347,9 @@ class SurfaceModel:
         if model.is_mesh:
             model = _faces_vertices_only(model)
         if len(model) < 3 or shape_kind(model.points) != "solid":
-            kind = "too small" if len(model) < 3 else shape_kind(model.points)
-            raise InputError(f"{model.name}: the model is {kind}; a pose cannot be fitted to it")
+            where = ("has fewer than 3 points" if len(model) < 3 else
+                     f"has its points {SHAPE_WORDS[shape_kind(model.points)]}")
+            raise InputError(f"{model.name}: the model {where}; a pose cannot be fitted to it")
         self.name = model.name
         self.diagonal = model.diagonal()
         self.is_mesh = model.is_mesh

@@ -11,6 +11,7 @@ import FreeCAD
 
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.toolpath import FORMATS
+from workcal_wb.core.toolpath.safety import DEFAULT_PATH_REACH_MM
 from workcal_wb.core.units import MM_PER_UNIT
 
 PATH = "User parameter:BaseApp/Preferences/Mod/WorkCal"
@@ -29,6 +30,8 @@ DEFAULTS = {
     "Regions": ("string", "Auto"),
     "ExportFormat": ("string", "krl"),
     "DeviationRangeMm": ("float", 0.0),  # 0 = from the data
+    # How far a toolpath's cutting moves may run from the workpiece model before an export refuses it.
+    "PathReachMm": ("float", DEFAULT_PATH_REACH_MM),
     "ReportDir": ("string", ""),  # "" = a folder beside the document (or the temp folder)
     "PickVisibleOnly": ("int", 1),  # box and lasso picks take only the points not hidden by others
     # Prepared models kept between calibrations (core/model_cache.py): 0 prepares them anew every time.
@@ -59,7 +62,7 @@ def get(name: str):
         value = default
     elif name == "ExportFormat" and value not in FORMATS:
         value = default
-    elif name == "ToleranceMm" and not value > 0:
+    elif name in ("ToleranceMm", "PathReachMm") and not value > 0:
         value = default
     elif name == "Resamples" and value < 1:
         value = default

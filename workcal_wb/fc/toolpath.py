@@ -27,7 +27,9 @@ from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, RAPID, Enve
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, comment_text, robot_path
 from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES, gcode_comment
 from workcal_wb.core.toolpath.model import ARC_CCW, ARC_CW, KINDS
-from workcal_wb.core.toolpath.safety import checked_placement, forced_banner
+from workcal_wb.core.toolpath.safety import DEFAULT_PATH_REACH_MM, checked_placement, forced_banner
+from workcal_wb.fc import prefs
+from workcal_wb.fc.models import model_cloud
 from workcal_wb.fc.placements import placement
 from workcal_wb.fc.proxies import Feature, add_properties, objects_of, type_of
 from workcal_wb.fc.undo import transaction
@@ -142,16 +144,19 @@ def _commands(path: Toolpath) -> list:
 
 def calibrated_path(toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
                     envelope: Envelope | None = None, table: RotaryTable | None = None,
-                    chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, source: str = "calibration") -> tuple:
-    """(``Path.Path`` of ``toolpath`` moved into B, whether forced), after the same checks as a file export.
+                    chord_tol_mm: float = DEFAULT_CHORD_TOL_MM, source: str = "calibration",
+                    workpiece_model=None, path_reach_mm: float = DEFAULT_PATH_REACH_MM) -> tuple:
+    """(``Path.Path`` of ``toolpath`` moved into B, whether forced), after the same checks as a file export
+    (the path held to ``workpiece_model``, X-A, when given).
 
     Positions only: FreeCAD's Path treats A/B words as rotary axes and would draw the path displaced,
     so the tool axis (in every exported program) is not written into the Path object."""
     options = ExportOptions(force=force, envelope=envelope, table=table, chord_tol_mm=chord_tol_mm,
-                            calibration_source=source)
-    T, forced = checked_placement(toolpath, calibration, options)
-    moved = transformed(toolpath, T, chord_tol_mm)
-    header = (forced_banner(calibration) if forced else []) + moved.header
+                            calibration_source=source, workpiece_model=workpiece_model, path_reach_mm=path_reach_mm)
+    checked = checked_placement(toolpath, calibration, options)
+    forced = checked.forced
+    moved = transformed(toolpath, checked.transform, chord_tol_mm)
+    header = (forced_banner(calibration) if forced else []) + moved.header + list(checked.notes)
     commands = [_comment_command(c) for c in header] + _commands(moved)
     commands += [_comment_command(c) for c in moved.footer]
     return Path.Path(commands), forced
@@ -189,7 +194,8 @@ class CalibratedPathFeature(Feature):
 
         source = obj.Source if obj.Source is not None else (obj.SourceFile or None)
         path, _ = calibrated_path(read_source(source), result_of(obj.Calibration), force=obj.Forced,
-                                  source=f"calibration {obj.Calibration.Label!r}")
+                                  source=f"calibration {obj.Calibration.Label!r}",
+                                  **held_to_workpiece(obj.Calibration))
         obj.Path = path
 
 
@@ -201,8 +207,15 @@ def check_calibrated_path(calibration, source=None, *, force: bool = False) -> b
 
     source = source if source is not None else toolpath_of(calibration.Document)
     _, forced = calibrated_path(read_source(source), result_of(calibration), force=force,
-                                source=f"calibration {calibration.Label!r}")
+                                source=f"calibration {calibration.Label!r}", **held_to_workpiece(calibration))
     return forced
+
+
+def held_to_workpiece(calibration) -> dict:
+    """The export options that hold a toolpath to the workpiece model X-A ``calibration`` matched: the
+    model (a Cloud) and how far from it the cutting moves may run (the preference)."""
+    return {"workpiece_model": model_cloud(calibration.Workpiece, role="workpiece"),
+            "path_reach_mm": prefs.get("PathReachMm")}
 
 
 def make_calibrated_path(calibration, source=None, *, force: bool = False):
@@ -247,6 +260,7 @@ def check_export(calibration, path, fmt: str | None = None, source=None, *, forc
 
     source = source if source is not None else toolpath_of(calibration.Document)
     fmt = fmt or format_for(path)
+    options = {**held_to_workpiece(calibration), **options}
     options = ExportOptions(force=force, calibration_source=f"calibration {calibration.Label!r}", **options)
     checked_placement(read_source(source), result_of(calibration), options, machine_for(fmt, options.machine))
 
@@ -264,6 +278,7 @@ def export_program(calibration, path, fmt: str | None = None, source=None, *, fo
     result = result_of(calibration)
     toolpath = read_source(source)
     fmt = fmt or format_for(path)
+    options = {**held_to_workpiece(calibration), **options}
     job = export(toolpath, result, fmt, path, force=force, calibration_source=f"calibration {calibration.Label!r}",
                  **options)
     text = (f"WorkCal: wrote {path}: {FORMATS[fmt].NAME} for {job.machine}, {len(toolpath)} moves from "
@@ -286,7 +301,8 @@ def robot_available() -> bool:
 def make_robot_trajectory(doc, toolpath: Toolpath, calibration: CalibrationResult, *, force: bool = False,
                           envelope: Envelope | None = None, table: RotaryTable | None = None,
                           chord_tol_mm: float = DEFAULT_CHORD_TOL_MM,
-                          rapid_feed_mm_min: float = DEFAULT_RAPID_FEED_MM_MIN, name: str = "WorkCalTrajectory"):
+                          rapid_feed_mm_min: float = DEFAULT_RAPID_FEED_MM_MIN, name: str = "WorkCalTrajectory",
+                          workpiece_model=None):
     """A Robot ``TrajectoryObject`` of LIN waypoints in B (velocities in mm/s), tool orientation as the exporters.
 
     Waypoints are not continuous: FreeCAD blends continuous ones with a fixed 3 mm radius, which KDL
@@ -297,9 +313,12 @@ def make_robot_trajectory(doc, toolpath: Toolpath, calibration: CalibrationResul
         raise MissingDependency("FreeCAD's Robot workbench is not available in this FreeCAD; "
                                 "export KRL or CSV instead") from exc
     options = ExportOptions(force=force, envelope=envelope, table=table, chord_tol_mm=chord_tol_mm,
-                            rapid_feed_mm_min=rapid_feed_mm_min, calibration_source=f"calibration for {name}")
-    T, forced = checked_placement(toolpath, calibration, options)
-    path = robot_path(ExportJob(toolpath, calibration, T, forced, None, options, "robot"), in_base_frame=True,
+                            rapid_feed_mm_min=rapid_feed_mm_min, calibration_source=f"calibration for {name}",
+                            workpiece_model=workpiece_model)
+    checked = checked_placement(toolpath, calibration, options)
+    forced = checked.forced
+    path = robot_path(ExportJob(toolpath, calibration, checked.transform, forced, None, options, "robot"),
+                      in_base_frame=True,
                       max_speed_mm_s=float("inf"))
     waypoints = [Robot.Waypoint(placement(path.matrix(i)), type="LIN", name=f"P{i + 1}",
                                 vel=float(path.feed[i]) / SECONDS_PER_MINUTE, cont=False) for i in range(len(path))]

@@ -12,11 +12,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scipy.spatial import cKDTree
+
 from .. import frames
 from ..errors import InputError, WorkCalError
+from ..pointops import sample_triangles
 from ..result import OK, CalibrationResult
+from ..surface import SurfaceModel
 from . import orientation
-from .model import RotaryTable, Toolpath
+from .model import CODE, RAPID, RotaryTable, Toolpath
 from .transform import DEFAULT_CHORD_TOL_MM, MIN_CHORD_TOL_MM, path_points, placement
 
 # No robot cell or machine tool reaches past this (mm from the base frame's origin): a W or a point
@@ -29,10 +33,26 @@ DEFAULT_FANUC_CONFIG = "N U T, 0, 0, 0"
 # The fewest lines a program part may be cut to: its frame (header, declarations, END) takes that many.
 MIN_PART_LINES = 10
 FANUC_CONFIG = re.compile(r"[NF] [UD] [TB], -?[0-9], -?[0-9], -?[0-9]")
+# How far (mm) a toolpath's cutting moves may run from the workpiece model, as their median: a finishing
+# pass runs on the surface and a roughing pass within a cutter's length of it, while a toolpath made for
+# another part (a mirrored model, the wrong file) runs far off.
+DEFAULT_PATH_REACH_MM = 25.0
+# Points along the cutting moves whose distances to the model give that median (evenly by length; a
+# median of this many is known to a fraction of a percent of the distances' spread).
+PATH_SAMPLES = 20_000
 
 
 class ExportRefused(WorkCalError):
     """The inputs were readable but exporting them would be unsafe (failed gates, envelope, NaN)."""
+
+
+class PathOffModel(ExportRefused):
+    """The toolpath's cutting moves run a median ``median_mm`` from the workpiece model, more than
+    ``reach_mm``: the toolpath was made for another part (or the model is not the workpiece's)."""
+
+    def __init__(self, message: str, median_mm: float, reach_mm: float):
+        super().__init__(message)
+        self.median_mm, self.reach_mm = median_mm, reach_mm
 
 
 class CalibrationNotOk(ExportRefused):
@@ -121,6 +141,8 @@ class ExportOptions:
     rapid_feed_mm_min: float = 6000.0
     max_lines: int | None = None  # lines per program part; None: the language's own limit
     calibration_source: str = "calibration"
+    workpiece_model: object = None  # the workpiece model X-A (a Cloud or a prepared SurfaceModel), to hold the path to
+    path_reach_mm: float = DEFAULT_PATH_REACH_MM
 
     def check(self) -> None:
         if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm >= MIN_CHORD_TOL_MM):
@@ -137,6 +159,9 @@ class ExportOptions:
                              "base side (T/B) and the turn numbers of J1, J4, J6, as in 'N U T, 0, 0, 0'")
         if not (math.isfinite(self.rapid_feed_mm_min) and self.rapid_feed_mm_min > 0):
             raise InputError(f"rapid feed must be a positive number of mm/min, not {self.rapid_feed_mm_min}")
+        if not (math.isfinite(self.path_reach_mm) and self.path_reach_mm > 0):
+            raise InputError(f"the toolpath's reach from the workpiece model must be a positive number of mm, "
+                             f"not {self.path_reach_mm}")
         if self.max_lines is not None and self.max_lines < MIN_PART_LINES:
             raise InputError(f"lines per program part (--max-lines) must be at least {MIN_PART_LINES}, "
                              f"not {self.max_lines}")
@@ -248,13 +273,72 @@ def forced_banner(calibration: CalibrationResult) -> list[str]:
     ]
 
 
+def cutting_points(toolpath: Toolpath, chord_tol_mm: float, count: int = PATH_SAMPLES) -> np.ndarray:
+    """Up to ``count`` points evenly spaced along the path's cutting (non-rapid) moves, arcs followed
+    within ``chord_tol_mm``; the cutting moves' end points when they have no length."""
+    points, owners = path_points(toolpath, chord_tol_mm)
+    cutting = toolpath.kind[owners] != CODE[RAPID]
+    if not cutting.any():
+        return np.empty((0, 3))
+    starts, ends = points[:-1][cutting[1:]], points[1:][cutting[1:]]
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    total = float(lengths.sum())
+    if not total > 0:
+        return points[cutting][:count]
+    along = (np.arange(count) + 0.5) * (total / count)
+    cumulative = np.cumsum(lengths)
+    k = np.minimum(np.searchsorted(cumulative, along), len(lengths) - 1)
+    share = 1.0 - (cumulative[k] - along) / np.where(lengths[k] > 0, lengths[k], 1.0)
+    return starts[k] + np.clip(share, 0.0, 1.0)[:, None] * (ends[k] - starts[k])
+
+
+def _surface_samples(model, spacing_mm: float) -> np.ndarray:
+    """Points on the model's surface at most about ``spacing_mm`` apart (a prepared model's own samples)."""
+    if isinstance(model, SurfaceModel):
+        return model.points
+    if model.is_mesh:
+        return sample_triangles(model.points, model.triangles, spacing_mm)[0]
+    return model.points
+
+
+def check_on_model(toolpath: Toolpath, model, reach_mm: float, chord_tol_mm: float) -> str:
+    """The header's line on how the toolpath lies on the workpiece model (both in X); refuses
+    (PathOffModel) when its cutting moves run a median of more than ``reach_mm`` from the surface."""
+    points = cutting_points(toolpath, chord_tol_mm)
+    if not len(points):
+        return "toolpath on the workpiece model: no cutting moves to hold to it"
+    surface = _surface_samples(model, reach_mm / 5)
+    distances = cKDTree(surface).query(points)[0]
+    median = float(np.median(distances))
+    within = 100.0 * float(np.mean(distances <= reach_mm))
+    if median <= reach_mm:
+        return (f"toolpath on the workpiece model {getattr(model, 'name', '')}: cutting moves a median "
+                f"{median:.2f} mm from its surface, {within:.0f} % within the reach {reach_mm:g} mm")
+    raise PathOffModel(
+        f"{toolpath.source}: its cutting moves run a median {median:.1f} mm from the workpiece model "
+        f"{getattr(model, 'name', '')} ({within:.0f} % within {reach_mm:g} mm of its surface): the toolpath was "
+        "made for another part, or the model is not this part's (mirrored? another file?); nothing was written",
+        median, reach_mm)
+
+
+@dataclass(frozen=True)
+class Placement:
+    """What the checks of an export found: the X -> B transform to use, whether the export goes ahead only
+    because it was forced, and the facts the program's header states."""
+
+    transform: np.ndarray
+    forced: bool
+    notes: tuple = ()
+
+
 def checked_placement(toolpath: Toolpath, calibration: CalibrationResult, options: ExportOptions,
-                      machine: str = "robot") -> tuple[np.ndarray, bool]:
-    """Every check an export needs, in one place: (X -> B transform to use, whether forced).
+                      machine: str = "robot") -> Placement:
+    """Every check an export needs, in one place.
 
     Positions are checked in B along the whole path (arcs sampled within the chordal tolerance), so a
     program written in workpiece coordinates is held to the same envelope as one written in B; the
-    sanity bound applies whether or not an envelope is given."""
+    sanity bound applies whether or not an envelope is given.  With the workpiece model, the path's
+    cutting moves are held to its surface (``check_on_model``); without, the header says so."""
     options.check()
     if not len(toolpath):
         raise InputError(f"{toolpath.source}: no moves to export")
@@ -267,4 +351,8 @@ def checked_placement(toolpath: Toolpath, calibration: CalibrationResult, option
     points, owners = path_points(toolpath, options.chord_tol_mm)
     check_positions(frames.apply(T, points), lambda k: toolpath.where(int(owners[k])), toolpath.source,
                     options.envelope)
-    return T, forced
+    if options.workpiece_model is None:
+        note = "toolpath on the workpiece model: not checked (no model given)"
+    else:
+        note = check_on_model(toolpath, options.workpiece_model, options.path_reach_mm, options.chord_tol_mm)
+    return Placement(T, forced, (note,))

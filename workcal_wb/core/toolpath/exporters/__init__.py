@@ -3,7 +3,7 @@
 ``render(job)`` yields the files of the program, ``(path, chunks)``: for a program over the controller's
 size limit its numbered parts first, then the main program at ``job.out``.
 ``export`` is the only way a program reaches the disk: checks first (calibration gates, sanity bound,
-finite numbers, work envelope in B, the machine's axes), then each file is written atomically in plain
+finite numbers, work envelope in B, the machine's axes, the path on the workpiece model), then each file is written atomically in plain
 ASCII (``common.ascii_text``), parts
 first and the main program last; a failure removes what this export wrote, and parts left by an
 earlier, longer export of the same program are removed.
@@ -52,8 +52,9 @@ def export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, out, op
         raise InputError(f"unknown output format {fmt!r}; use one of {', '.join(FORMATS)}")
     options = options or ExportOptions(**settings)
     machine = machine_for(fmt, options.machine)
-    T, forced = checked_placement(toolpath, calibration, options, machine)
-    job = common.ExportJob(toolpath, calibration, T, forced, Path(out), options, machine)
+    checked = checked_placement(toolpath, calibration, options, machine)
+    job = common.ExportJob(toolpath, calibration, checked.transform, checked.forced, Path(out), options, machine,
+                           notes=list(checked.notes))
     files = FORMATS[fmt].render(job)
     written = []
     try:

@@ -183,6 +183,7 @@ class ExportStep(Step):
         """Write the program (recorded); forcing is asked for a calibration that is not ok; a tool tilted
         past what a 3-axis machine allows is explained on the page with its two ways out."""
         from workcal_wb.core.toolpath import ToolTilted
+        from workcal_wb.core.toolpath.safety import PathOffModel
         from workcal_wb.gui.commands.toolpath import export_program
         from workcal_wb.gui.task_panels.common import show_error, with_force
 
@@ -194,6 +195,11 @@ class ExportStep(Step):
                                                           **self.options()), confirm)
         except ToolTilted as exc:
             self.show_tilt(exc)
+            return None
+        except PathOffModel as exc:
+            show_error(translate("WorkCal", "Export robot program"), str(exc) + " " + translate(
+                "WorkCal", "If it is this part's toolpath (a roughing pass deep in the stock), allow {} mm under "
+                           "Edit > Preferences > WorkCal > Toolpath within.").format(math.ceil(exc.median_mm * 1.2)))
             return None
         except WorkCalError as exc:
             show_error(translate("WorkCal", "Export robot program"), str(exc))
