@@ -1,0 +1,96 @@
+"""Forward and inverse kinematics in the controller's frames, and joint limits with turn variants.
+
+Callers work in the frames a robot program speaks of: a pose is the controller's flange frame in the
+controller's base frame (mm), joints are the controller's joint values (degrees).  The robot's ``base``
+and ``flange`` frames connect these to the kinematic model (OPW or UR), which this module picks.
+
+``inverse`` gives eight branches per pose, each joint in (-180, 180]; their index keeps its meaning from
+pose to pose (see opw.py and ur.py).  A joint whose range spans more than 360 degrees (KUKA A4 and A6 at
++-350, ABB axis 6 at +-400, every UR joint at +-360) reaches the same pose at other turns:
+``turn_candidates`` lists them, ``wrap_into_limits`` picks per joint the turn within limits nearest to a
+reference (joint by joint, so a branch stays the branch it was).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import frames
+from . import opw, ur
+from .model import Robot
+
+
+def forward(robot: Robot, joints_deg) -> np.ndarray:
+    """(..., 4, 4) controller flange in the controller base frame (mm) for (..., 6) controller joints."""
+    model_pose = _solver(robot).forward(robot, joints_deg)
+    return frames.invert(robot.base_transform) @ model_pose @ robot.flange_transform
+
+
+def inverse(robot: Robot, poses) -> np.ndarray:
+    """(..., 8, 6) controller joints (degrees) for (..., 4, 4) controller flange poses in the controller
+    base frame; NaN rows are branches that cannot reach the pose."""
+    poses = np.asarray(poses, dtype=float)
+    if poses.shape[-2:] != (4, 4):
+        raise ValueError(f"poses must have shape (..., 4, 4), got {poses.shape}")
+    model_pose = robot.base_transform @ poses @ frames.invert(robot.flange_transform)
+    return _solver(robot).inverse(robot, model_pose)
+
+
+def within_limits(robot: Robot, joints_deg) -> np.ndarray:
+    """Boolean mask (...) for (..., 6) joints: every joint within its limits (NaN joints are not)."""
+    joints = np.asarray(joints_deg, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.all((joints >= robot.limits[:, 0]) & (joints <= robot.limits[:, 1]), axis=-1)
+
+
+def limit_margin_deg(robot: Robot, joints_deg) -> np.ndarray:
+    """(...) smallest distance in degrees from any joint to its nearer limit; negative when a joint is
+    outside its limits, NaN for NaN joints."""
+    joints = np.asarray(joints_deg, dtype=float)
+    margin = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
+    return np.min(margin, axis=-1)  # NaN propagates
+
+
+def turn_offsets(robot: Robot) -> np.ndarray:
+    """(6, T) multiples of 360 degrees that can bring a joint value in (-180, 180] within each joint's limits,
+    NaN-padded; T is the largest count over the joints (1 when no range exceeds 360 degrees)."""
+    per_joint = []
+    for low, high in robot.limits:
+        # A value v in (-180, 180] shifted by 360 k lies in (360 k - 180, 360 k + 180]; keep k where that
+        # interval meets [low, high].
+        first = int(np.ceil((low - 180.0) / 360.0))
+        last = int(np.floor((high + 180.0) / 360.0))
+        per_joint.append([360.0 * k for k in range(first, last + 1) if 360.0 * k + 180.0 >= low
+                          and 360.0 * k - 180.0 < high])
+    width = max(len(offsets) for offsets in per_joint)
+    table = np.full((6, width), np.nan)
+    for axis, offsets in enumerate(per_joint):
+        table[axis, :len(offsets)] = sorted(offsets, key=abs)
+    return table
+
+
+def turn_candidates(robot: Robot, joints_deg) -> np.ndarray:
+    """(..., 6, T) for (..., 6) joints: each joint's values at every turn (joint + 360 k) that lie within its
+    limits, NaN elsewhere; the turns are ordered by |k| (the given turn first)."""
+    joints = np.asarray(joints_deg, dtype=float)
+    candidates = opw.wrap_degrees(joints)[..., None] + turn_offsets(robot)
+    with np.errstate(invalid="ignore"):
+        inside = (candidates >= robot.limits[:, :1]) & (candidates <= robot.limits[:, 1:])
+    return np.where(inside, candidates, np.nan)
+
+
+def wrap_into_limits(robot: Robot, joints_deg, reference_deg=0.0) -> np.ndarray:
+    """(..., 6) joints moved by whole turns, joint by joint, to the value within limits nearest to
+    ``reference_deg`` (broadcast against the joints: 0 by default, or e.g. the previous pose's joints of the
+    same branch to follow a path); a joint with no turn within its limits becomes NaN, and so its row."""
+    joints = np.asarray(joints_deg, dtype=float)
+    candidates = turn_candidates(robot, joints)
+    reference = np.broadcast_to(np.asarray(reference_deg, dtype=float), joints.shape)[..., None]
+    distance = np.where(np.isnan(candidates), np.inf, np.abs(candidates - reference))
+    best = np.argmin(distance, axis=-1)[..., None]
+    chosen = np.take_along_axis(candidates, best, axis=-1)[..., 0]
+    chosen[np.isnan(chosen).any(axis=-1)] = np.nan
+    return chosen
+
+
+def _solver(robot: Robot):
+    return opw if robot.kinematics == "opw" else ur
