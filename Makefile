@@ -17,7 +17,7 @@ XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup python-packages peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
+.PHONY: setup python-packages peers test-peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
         bench-scenes bench-processes bench-large bench-matcher bench-lblock clean
 
 setup:
@@ -34,7 +34,7 @@ demo: setup
 
 test: test-headless test-gui
 
-test-headless: setup python-packages
+test-headless: setup python-packages test-peers
 	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
 	rc = pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()); sys.stdout.flush(); sys.exit(rc)"
 
@@ -50,6 +50,13 @@ test-other-freecad:
 FUZZ_EXAMPLES ?= 20000
 fuzz: setup
 	WORKCAL_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest $(PYTEST_ARGS) $(CURDIR)/tests/core/test_fuzz.py
+
+# An independent solver the robot kinematics tests check ours against (tests only, never a runtime
+# dependency), one folder per Python (the chroot's other Debian has another); without network it skips.
+PYTAG         := $(shell $(PYTHON) -c 'import sys; print(f"py{sys.version_info[0]}{sys.version_info[1]}")')
+test-peers: setup
+	@[ -d $(BUILD)/test-peers/$(PYTAG)/py_opw_kinematics ] || $(PYTHON) -m pip install --quiet --no-deps \
+	    --target $(BUILD)/test-peers/$(PYTAG) py-opw-kinematics || echo "WorkCal: py-opw-kinematics not installed: its cross-checks skip"
 
 # The whole-process table's second peer, from PyPI into build/peers (the benchmark's only; never a runtime
 # dependency). --no-deps: Debian's numpy stays the one every process imports.

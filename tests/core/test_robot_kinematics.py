@@ -395,13 +395,15 @@ def test_kr6_matches_the_ros_industrial_urdf_chain():
 def _py_opw_kinematics():
     """The Rust-backed solver's extension module: the package if it imports (it needs scipy >= 1.16 for
     RigidTransform), else its compiled core (KinematicModel, Robot with forward/batch_forward/reach), which
-    needs nothing but numpy.  Looked for in build/peers beside the checkout, then on sys.path."""
+    needs nothing but numpy.  Looked for where `make test` puts it (build/test-peers/pyXY beside the checkout),
+    in build/peers, then on sys.path."""
     try:
         import py_opw_kinematics._internal as internal
         return internal
     except ImportError:
         pass
-    for folder in (ROOT / "build" / "peers", *map(Path, sys.path)):
+    tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
+    for folder in (ROOT / "build" / "test-peers" / tag, ROOT / "build" / "peers", *map(Path, sys.path)):
         # Only a build for this interpreter (a wheel for another Python may load and then crash).
         suffixes = [s for s in importlib.machinery.EXTENSION_SUFFIXES if s != ".so"]
         found = [so for so in glob.glob(str(folder / "py_opw_kinematics" / "_internal*"))
@@ -412,8 +414,7 @@ def _py_opw_kinematics():
             module = importlib.util.module_from_spec(spec)
             loader.exec_module(module)
             return module
-    pytest.skip("py-opw-kinematics is not installed for this Python (pip install --no-deps --target "
-                "build/peers py-opw-kinematics)")
+    pytest.skip("py-opw-kinematics is not installed for this Python (make test-peers)")
 
 
 OPW_ROBOTS = [robot_id for robot_id in builtin_robots() if load_robot(robot_id).kinematics == "opw"]
