@@ -94,6 +94,8 @@ def test_html_shows_status_matrices_and_residuals(written, lumpy):
     for gate in result.quality_gates:
         assert gate["name"] in page
     assert f"{result.uncertainty['surface_bound_mm']:.4f}" in page
+    # the bound's parts and its level, as measured against the truth
+    assert f"{result.uncertainty['surface_edge_bias_mm']:.4f}" in page and "at least 95 times in 100" in page
 
 
 def test_deviation_map_shows_the_lump_and_the_carving(lumpy):

@@ -80,3 +80,18 @@ def test_an_l_block_on_its_foot_is_never_ok_turned_over(bunny, seed, noise):
     assert result.reference.status != "ok" or frames.rotation_between_deg(result.V, cell.V) < 0.3
     named = [c for c in result.reference.candidates if frames.rotation_between_deg(c.matrix, cell.V) < 1]
     assert right_w or named, result.reasons
+
+
+def test_the_bound_covers_a_reference_centred_between_a_fold_edge_and_a_silhouette(bunny):
+    """The block's length is held only by its edges: a fold edge seen on both faces at one end, a
+    silhouette whose last pixels are mixed with the table behind at the other.  The centred pose is
+    0.25 mm off along it, alike in every refit; the bound must still cover the error."""
+    cell = upright_l_scan(UprightLSpec(seed=26, noise_mm=0.1), bunny)
+    result = calibrate(cell.cloud, cell.workpiece_model, cell.reference_model, options=CalibrationOptions(seed=0))
+    model = cell.workpiece_model.points
+    error = np.linalg.norm(frames.apply(result.W, model) - frames.apply(cell.W, model), axis=1).max()
+    assert 0.15 < error < 0.3 and frames.rotation_between_deg(result.W, cell.W) < 0.05  # right, and off by the bias
+    held = result.reference.stability["held_by_edges"]
+    assert held and held[0]["bias_mm"] > 0.1
+    assert result.uncertainty["surface_bound_mm"] >= error and result.uncertainty["surface_edge_bias_mm"] > 0.15
+    assert result.status != "ok" or result.uncertainty["surface_bound_mm"] <= result.tolerance_mm

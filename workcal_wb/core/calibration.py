@@ -17,6 +17,7 @@ import numpy as np
 
 from . import frames, physics, pointops
 from .distortion import distortion
+from .edges import slide
 from .errors import InputError, NotFound
 from .geometry import Cloud
 from .refine import coarse_to_fine
@@ -444,13 +445,34 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         for key, p in targets.items():
             spread[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
     out = {"method": f"bootstrap: {options.resamples} refits of both matches on {n['workpiece']} + {n['reference']} "
-                     f"resampled points from nudged starts, {UNCERTAINTY_FACTOR:g} x RMS displacement",
+                     f"resampled points from nudged starts, {UNCERTAINTY_FACTOR:g} x the RMS displacement combined with "
+                     "how far a pose centred between edges can be off (a uniform error within it)",
            "rotation_bound_deg": float(UNCERTAINTY_FACTOR * np.sqrt(np.mean(np.square(rotations))))}
     for key, total in spread.items():
-        per_point = UNCERTAINTY_FACTOR * np.sqrt(total / options.resamples)
+        bias = edge_bias(matches, W, targets[key])
+        # Three standard uncertainties: the refits' spread, and the bias as an error anywhere within +-bias
+        # (a uniform one's standard uncertainty is bias / sqrt(3)); alone, the bias is covered whole.
+        per_point = UNCERTAINTY_FACTOR * np.sqrt(total / options.resamples + bias ** 2 / 3)
         out[f"{key}_bound_mm"] = float(per_point.max())
         out[f"{key}_median_mm"] = float(np.median(per_point))
+        out[f"{key}_edge_bias_mm"] = float(bias.max())
     return out
+
+
+def edge_bias(matches, W: np.ndarray, points_X: np.ndarray) -> np.ndarray:
+    """How far (mm) each point (workpiece frame X) can be moved by the poses' bias along the motions only
+    their edges hold (edges.centre_on_edges: ``bias_mm`` each way along ``twist``), summed over the
+    motions of both matches.  A refit centres alike, so this is what the bootstrap's spread leaves out."""
+    bias = np.zeros(len(points_X))
+    in_B = frames.apply(W, points_X)
+    for m, points in zip(matches, (points_X, in_B)):  # the workpiece's motions act in X, the reference's in B
+        for held in (m.stability or {}).get("held_by_edges", []):
+            if "twist" not in held:
+                continue
+            moved = [frames.apply(slide(np.asarray(held["twist"]), np.asarray(held["centre"]), s * held["bias_mm"]),
+                                  points) for s in (-1.0, 1.0)]
+            bias += np.max([np.linalg.norm(p - points, axis=1) for p in moved], axis=0)
+    return bias
 
 
 def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> dict:

@@ -54,8 +54,9 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
                     tolerance_mm: float) -> tuple[np.ndarray, dict]:
     """Move ``T`` (scan -> model) to the middle of the edge interval along each weak motion and
     return it with the stability of the fit (see stability.stability) extended by
-    ``held_by_edges``: for each such motion its description, eigenvalue and half-width
-    ``slack_mm``.  Motions not pinned within REACH_TOLERANCES tolerances each way (past the off
+    ``held_by_edges``: for each such motion its description, eigenvalue, half-width ``slack_mm``, the most
+    the middle can be off the truth ``bias_mm``, and the motion itself (``twist`` in units of 1 mm RMS over
+    the points, about ``centre``; see ``slide``).  Motions not pinned within REACH_TOLERANCES tolerances each way (past the off
     threshold) are listed as free: their faces hold them weakly (WEAK_RATIO) and no edge pins them."""
     points = points[surface.nearest_cell(frames.apply(T, points), gate + surface.spacing)[2]]  # clutter is no edge
     moved = frames.apply(T, points)
@@ -77,8 +78,13 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
             continue
         lo, hi = interval
         T = slide(twist, centre, (lo + hi) / 2) @ T
+        # The truth lies where neither edge has begun to lose points: at least ``threshold`` in from each
+        # end.  The middle is off it by at most the rest of the slack, when one edge's points run right up
+        # to it and the other's stop short (a fold edge seen on both faces against a silhouette, whose
+        # last pixels are mixed with what lies behind): a bias the refits, centring alike, cannot see.
         held.append({"motion": describe_motion(vecs[:, i], centre, radius), "eigenvalue": float(vals[i]),
-                     "slack_mm": float((hi - lo) / 2)})
+                     "slack_mm": float((hi - lo) / 2), "bias_mm": float(max((hi - lo) / 2 - threshold, 0.0)),
+                     "twist": twist.tolist(), "centre": centre.tolist()})
     return T, {"ratio": float(vals[0]), "eigenvalues": vals.tolist(), "free_motions": free,
                "constrained": not free, "held_by_edges": held}
 
