@@ -124,14 +124,18 @@ def forward(robot_or_params, joints_deg) -> np.ndarray:
 
 def inverse(robot_or_params, poses) -> np.ndarray:
     """(..., 8, 6) controller joints in degrees for (..., 4, 4) poses, NaN where a branch is unreachable."""
-    params = parameters_of(robot_or_params)
+    return solved_in_chunks(_inverse_chunk, parameters_of(robot_or_params), poses)
+
+
+def solved_in_chunks(solve, params, poses) -> np.ndarray:
+    """``solve(params, (n, 4, 4)) -> (n, 8, 6)`` over (..., 4, 4) poses, CHUNK poses at a time."""
     poses = np.asarray(poses, dtype=float)
     if poses.shape[-2:] != (4, 4):
         raise ValueError(f"poses must have shape (..., 4, 4), got {poses.shape}")
     flat = poses.reshape(-1, 4, 4)
     out = np.empty((len(flat), 8, 6))
     for start in range(0, len(flat), CHUNK):
-        out[start:start + CHUNK] = _inverse_chunk(params, flat[start:start + CHUNK])
+        out[start:start + CHUNK] = solve(params, flat[start:start + CHUNK])
     return out.reshape(poses.shape[:-2] + (8, 6))
 
 

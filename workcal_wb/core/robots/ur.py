@@ -26,10 +26,8 @@ from __future__ import annotations
 import numpy as np
 
 from .model import Robot, UrParameters
-from .opw import WRIST_SINGULAR_SIN, arccos_within_rounding, wrap_degrees
+from .opw import WRIST_SINGULAR_SIN, arccos_within_rounding, solved_in_chunks, wrap_degrees
 
-# Poses solved per chunk: bounds the temporaries at a few hundred MB whatever the input size.
-CHUNK = 1 << 17
 # The DH twists of every UR arm (the e-Series and CB3 tables differ only in lengths).
 _ALPHA = np.radians([90.0, 0.0, 0.0, 90.0, -90.0, 0.0])
 
@@ -61,15 +59,7 @@ def forward(robot_or_params, joints_deg) -> np.ndarray:
 
 def inverse(robot_or_params, poses) -> np.ndarray:
     """(..., 8, 6) joints in degrees for (..., 4, 4) flange poses, NaN where a branch is unreachable."""
-    p = parameters_of(robot_or_params)
-    poses = np.asarray(poses, dtype=float)
-    if poses.shape[-2:] != (4, 4):
-        raise ValueError(f"poses must have shape (..., 4, 4), got {poses.shape}")
-    flat = poses.reshape(-1, 4, 4)
-    out = np.empty((len(flat), 8, 6))
-    for start in range(0, len(flat), CHUNK):
-        out[start:start + CHUNK] = _inverse_chunk(p, flat[start:start + CHUNK])
-    return out.reshape(poses.shape[:-2] + (8, 6))
+    return solved_in_chunks(_inverse_chunk, parameters_of(robot_or_params), poses)
 
 
 def _inverse_chunk(p: UrParameters, T: np.ndarray) -> np.ndarray:
