@@ -253,3 +253,11 @@ def test_calibrate_takes_the_robot_and_its_tool_too(files):
     options = robot_options(args)
     assert options["robot"].id == "ur5e"
     np.testing.assert_allclose(options["tool"], frames.rigid(frames.rot_y(90.0), (0.0, 0.0, 100.0)), atol=1e-12)
+
+
+def test_calibrate_refuses_a_robot_that_does_not_run_the_format_before_it_calibrates(files, capsys):
+    given = str(files / "part.nc")
+    assert main(["calibrate", "--scan", given, "--workpiece", given, "--reference", given, "--toolpath", given,
+                 "--out", str(files / "out"), "--robot", "kuka_kr16_2"]) == 2  # G-code is the default format
+    assert "robot kuka_kr16_2: G-code is written for machine tools" in capsys.readouterr().err
+    assert not (files / "out").exists()

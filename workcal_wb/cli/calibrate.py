@@ -118,7 +118,10 @@ def warn(clouds) -> None:
 
 def run(args) -> int:
     from workcal_wb.core.report import write_report
+    from workcal_wb.core.toolpath.reach import check_controller
 
+    if args.toolpath:  # a robot that cannot run the format is said before the scan is read, not after calibrating
+        check_controller(args.robot, FORMATS[args.format])
     inputs = [*args.scan, args.workpiece, args.reference, args.toolpath, args.workpiece_indices, args.reference_indices]
     cache = model_cache(args)
     with OutputFolder(args.out, "calibrate", OUTPUTS, keep=[p for p in inputs if p]) as outputs:
