@@ -18,7 +18,7 @@ XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
 .PHONY: setup python-packages peers test-peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
-        bench-scenes bench-processes bench-large bench-matcher bench-lblock clean
+        bench-scenes bench-processes bench-large bench-matcher bench-lblock bench-reach clean
 
 setup:
 	@.ci/install-debian-packages $(DEB_PACKAGES)
@@ -90,6 +90,10 @@ bench-scenes: setup
 # Only the L-block on its foot (100 scenes of a reference that nearly maps onto itself turned over), its own section.
 bench-lblock: setup
 	$(PYTHON) -m workcal_wb bench --only lblock --workers 2 --out $(CURDIR)/docs/benchmarks.md
+
+# Only the reach-check table (check_reach on a million poses beside py-opw-kinematics), replacing its section.
+bench-reach: setup test-peers
+	$(PYTHON) -m workcal_wb bench --only reach --out $(CURDIR)/docs/benchmarks.md
 
 # Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:

@@ -4,12 +4,12 @@ Each ``check_*`` raises AssertionError naming the line and the rule a program br
 plain ASCII (UR's script interface takes only ASCII text, Fanuc TP and CNC posts write ASCII).  They follow:
 KRL: the krl.g4 grammar's module structure (``&`` header lines, then DEF on the first line, EXT
 declarations before statements, END), names of at most 24 characters, statements of the forms
-WorkCal writes; RAPID: MODULE/ENDMODULE, declarations before routines, no PROC main, every used
-tool/work object/speed/zone declared, identifiers of at most 32 characters, strings of at most 80;
-URScript: ``def`` in the first column on the first line, every line up to ``end`` indented, ``halt``
-a keyword (no ``halt()``); Fanuc
-LS: /PROG /ATTR /MN /POS /END, ``NNNN:`` lines with the motion letter right after the colon,
-remarks of at most 32 characters, every P[] used defined, LINE_COUNT true, at most 9999 lines;
+WorkCal writes (a PTP to a POS with Status 0..7 and Turn 0..63); RAPID: MODULE/ENDMODULE,
+declarations before routines, no PROC main, every used tool/work object/speed/zone declared,
+identifiers of at most 32 characters, strings of at most 80; URScript: ``def`` in the first column
+on the first line, every line up to ``end`` indented, ``halt`` a keyword (no ``halt()``); Fanuc LS:
+/PROG /ATTR /MN /POS /END, ``NNNN:`` lines with the motion letter right after the colon, remarks of
+at most 32 characters, every P[] used defined, LINE_COUNT true, at most 9999 lines;
 G-code: one word grammar (letter + number), comments without ``(`` ``;`` ``%`` inside, ``%`` only
 as the first and last line, at most one code of each modal group per block, G43/G43.4 H only in a block
 that moves Z (on Fanuc-family controls the offset itself moves Z).
@@ -19,8 +19,11 @@ import re
 IDENT = r"[A-Za-z_$][A-Za-z0-9_$]*"
 NUMBER = r"-?\d+(?:\.\d+)?"
 AGGREGATE = r"\{X N, Y N, Z N, A N, B N, C N\}".replace("N", NUMBER)
+# A POS: the frame with Status and Turn (whole numbers, Status 0..7, Turn 0..63)
+POS = r"\{X N, Y N, Z N, A N, B N, C N, S [0-7], T (?:[0-9]|[1-5][0-9]|6[0-3])\}".replace("N", NUMBER)
 KRL_STATEMENTS = [rf"BAS\(#\w+, {NUMBER}\)", rf"\$BASE = \$ROBROOT(?::{AGGREGATE})?", rf"\$APO\.CDIS = {NUMBER}",
-                  rf"\$VEL\.CP = {NUMBER}", "PTP XHOME", rf"PTP {AGGREGATE}", rf"LIN {AGGREGATE}( C_DIS)?", "HALT",
+                  rf"\$VEL\.CP = {NUMBER}", "PTP XHOME", rf"PTP {AGGREGATE}", rf"PTP {POS}", rf"LIN {AGGREGATE}( C_DIS)?",
+                  "HALT",
                   rf"WAIT SEC {NUMBER}", r"IF .* THEN", "ENDIF", rf"{IDENT}\( \)"]
 
 

@@ -280,7 +280,7 @@ def test_exit_status_is_documented_in_every_help_and_in_the_readme(capsys):
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     codes = re.findall(r"^\s+(\d+)\s", EXIT_STATUS, re.M)
     assert codes == ["0", "1", "2", "3", "4", "70", "130"]
-    for command in ["", "calibrate", "match", "toolpath", "simulate", "demo", "study", "bench"]:
+    for command in ["", "calibrate", "match", "toolpath", "robots", "simulate", "demo", "study", "bench"]:
         assert main([command, "--help"] if command else ["--help"]) == 0
         shown = capsys.readouterr().out
         assert "exit status (the same for every subcommand):" in shown, command

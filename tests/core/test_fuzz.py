@@ -122,24 +122,29 @@ TEXT = st.lists(st.one_of(st.sampled_from(HOSTILE), st.text(max_size=6)), min_si
 def test_no_text_from_outside_writes_into_a_program(folder):
     """Arbitrary text in every slot an export writes from outside (the toolpath file's name, its header
     and move comments, the reader's warnings, the calibration file's name, its reasons and gate names,
-    the output file's name where the format lets it be any): every program still holds exactly the
-    moves of the toolpath, parsed back (G-code by WorkCal's own reader), every line printable ASCII,
-    and no KRL line a fold marker."""
+    the output file's name where the format lets it be any, the name in the robot file of a robot
+    program's --robot): every program still holds exactly the moves of the toolpath, parsed back
+    (G-code by WorkCal's own reader), every line printable ASCII, and no KRL line a fold marker."""
     import dataclasses
+    import json
 
     from program_checkers import check_fanuc, check_gcode, check_krl, check_rapid, check_urscript
     from test_toolpath_exporters import PARSERS, SOURCE, assert_poses, calibration, expected
 
     from workcal_wb.core.result import Reason
+    from workcal_wb.core.robots.model import LIBRARY, robot_from_dict
     from workcal_wb.core.toolpath import export, linearised, parse_gcode
 
     plain = parse_gcode(SOURCE, "part.nc")
     names = {"krl": "prog.src", "fanuc": "prog.ls"}
     checks = {"krl": lambda t: check_krl(t, "prog"), "fanuc": lambda t: check_fanuc(t, "PROG"), "rapid": check_rapid,
               "urscript": check_urscript, "gcode": check_gcode, "csv": lambda t: None}
+    # A robot of each format's maker that follows the path (so its configuration is written too).
+    robot_files = {"krl": "kuka_kr16_2", "rapid": "abb_irb6700_200_260", "fanuc": "fanuc_m20ia", "urscript": "ur10e",
+                   "csv": "kuka_kr16_2"}
 
     @FUZZ
-    @given(fmt=st.sampled_from(sorted(checks)), texts=st.lists(TEXT, min_size=8, max_size=8))
+    @given(fmt=st.sampled_from(sorted(checks)), texts=st.lists(TEXT, min_size=9, max_size=9))
     def write(fmt, texts):
         path = dataclasses.replace(plain, source=texts[0], header=[texts[1]], warnings=[texts[2]],
                                    comments={0: texts[3], 2: texts[4] + "\n" + texts[5]})
@@ -150,13 +155,21 @@ def test_no_text_from_outside_writes_into_a_program(folder):
         name = names.get(fmt) or f"p{stem}.{ {'rapid': 'mod', 'urscript': 'script', 'gcode': 'nc', 'csv': 'csv'}[fmt] }"
         out = folder / fmt / name
         out.parent.mkdir(exist_ok=True)
-        export(path, result, fmt, out, calibration_source=texts[5], machine="5axis-tcp" if fmt == "gcode" else None)
+        robot = None
+        if fmt in robot_files:
+            data = json.loads((LIBRARY / f"{robot_files[fmt]}.json").read_text())
+            robot = robot_from_dict({**data, "name": "R" + texts[8]})
+        job = export(path, result, fmt, out, calibration_source=texts[5], machine="5axis-tcp" if fmt == "gcode" else None,
+                     robot=robot)
+        assert robot is None or job.reach.reachable
         text = out.read_text(encoding="ascii")
         assert all(line.replace("\t", " ").isprintable() for line in text.split("\n")), text
         checks[fmt](text)
         if fmt == "gcode":
             again = linearised(parse_gcode(text, "again.nc"), 0.01)
             np.testing.assert_allclose(again.points(), expected(plain)[0], atol=1e-3)
+        elif fmt == "urscript":
+            assert_poses(PARSERS[fmt](text, robot), plain)
         else:
             assert_poses(PARSERS[fmt](text), plain)
         if fmt == "krl":

@@ -7,6 +7,7 @@ import re
 import numpy as np
 import pytest
 
+from program_checkers import comment_text
 from workcal_wb.cli import main
 from workcal_wb.core import frames
 from workcal_wb.core.result import CalibrationResult
@@ -172,3 +173,91 @@ def test_a_toolpath_for_the_mirrored_part_is_refused_and_the_right_model_named_i
     assert re.search(r"on the workpiece model right.stl: cutting moves a median \d\.\d\d mm", out.read_text().replace("\n;", " "))
     assert main(args) == 0 and "not checked (no model given)" in out.read_text()
     assert main([*args, "--workpiece", str(files / "left.stl"), "--path-reach", str(math.ceil(median * 1.2))]) == 0
+
+
+# ---------------------------------------------------------------------------- --robot and --tool
+
+
+def test_an_unknown_robot_exits_2_listing_the_built_in_ones(files, capsys):
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.src"), "--robot", "kr17") == 2
+    err = capsys.readouterr().err
+    assert err.startswith("workcal toolpath: error: argument --robot: kr17: no built-in robot of that id and no such file")
+    assert "built-in robots: abb_irb2400_16, " in err and "kuka_kr16_2" in err and err.count("\n") == 1
+    assert not (files / "p.src").exists()
+
+
+@pytest.mark.parametrize("tool", ["0,0,150", "0,0,150,0,0,x", "0,0,nan,0,0,0"])
+def test_a_bad_tool_exits_2_naming_the_option(files, capsys, tool):
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.src"),
+               "--robot", "kuka_kr16_2", "--tool", tool) == 2
+    err = capsys.readouterr().err
+    assert f"argument --tool: expected six numbers X,Y,Z,A,B,C (mm and degrees, the TCP in the flange frame), got " \
+           f"'{tool}'" in err
+
+
+def test_a_robot_file_of_ones_own_checks_the_program_and_writes_its_configuration(files, capsys):
+    from workcal_wb.core.robots.model import LIBRARY
+
+    data = json.loads((LIBRARY / "kuka_kr16_2.json").read_text())
+    data.update(id="cell_7_kr16", name="Cell 7 KR 16")
+    (files / "cell7.json").write_text(json.dumps(data))
+    out = files / "prog.src"
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(out), "--robot", str(files / "cell7.json"),
+               "--tool", "-20,0,150,0,0,0") == 0  # a value starting like a negative number is a value
+    text = out.read_text()
+    assert "reach: checked for Cell 7 KR 16 (cell_7_kr16) with the TCP X -20.000 Y 0.000 Z 150.000 mm" in \
+        comment_text(text)
+    assert re.search(r"^PTP \{X [^}]*, S [0-7], T \d+\}$", text, flags=re.M)
+
+
+def test_a_robot_that_does_not_run_the_format_exits_2(files, capsys):
+    assert run(files, "--calibration", str(files / "ok.json"), "--out", str(files / "p.src"), "--robot", "ur5e") == 2
+    assert "robot ur5e (Universal Robots UR5e) is a Universal Robots robot: it does not run KUKA KRL programs" in \
+        capsys.readouterr().err
+
+
+def test_a_program_the_robot_cannot_follow_exits_1_with_the_move_the_placement_and_force(files, capsys):
+    far = W.copy()
+    far[:3, 3] += [3000.0, 0.0, 0.0]
+    CalibrationResult("ok", far).to_json(files / "far.json")
+    out = files / "prog.src"
+    args = ["--calibration", str(files / "far.json"), "--out", str(out), "--robot", "kuka_kr16_2"]
+    assert run(files, *args) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("workcal toolpath: refused: ") and err.count("\n") == 1 and not out.exists()
+    assert "robot target 1 (line 3) is out of the robot's reach" in err
+    assert re.search(r"move the part \d+ mm along -X .*of the robot base \(towards the robot\)", err)
+    assert err.rstrip().endswith("force it (--force): the program then says FORCED and why")
+    assert run(files, *args, "--force") == 0
+    assert "workcal toolpath: warning: FORCED EXPORT: the reach check failed: KUKA KR 16-2" in capsys.readouterr().err
+    assert ";FORCED EXPORT: the reach check failed" in out.read_text()
+
+
+def test_the_robots_command_lists_the_built_in_robots(capsys):
+    from workcal_wb.core.robots import builtin_robots
+
+    assert main(["robots"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == builtin_robots()
+    assert any(re.match(r"kuka_kr16_2 +KUKA KR 16-2 +KUKA +limits \(deg\) \[-185, 185\], \[-155, 35\]", line)
+               for line in lines)
+
+
+def test_calibrate_takes_the_robot_and_its_tool_too(files):
+    from workcal_wb.cli import build_parser
+    from workcal_wb.cli.toolpath import robot_options
+
+    given = [str(files / "part.nc")] * 3
+    args = build_parser("calibrate").parse_args(["calibrate", "--scan", given[0], "--workpiece", given[1],
+                                                 "--reference", given[2], "--robot", "ur5e", "--tool", "0,0,100,0,90,0"])
+    options = robot_options(args)
+    assert options["robot"].id == "ur5e"
+    np.testing.assert_allclose(options["tool"], frames.rigid(frames.rot_y(90.0), (0.0, 0.0, 100.0)), atol=1e-12)
+
+
+def test_calibrate_refuses_a_robot_that_does_not_run_the_format_before_it_calibrates(files, capsys):
+    given = str(files / "part.nc")
+    assert main(["calibrate", "--scan", given, "--workpiece", given, "--reference", given, "--toolpath", given,
+                 "--out", str(files / "out"), "--robot", "kuka_kr16_2"]) == 2  # G-code is the default format
+    assert "robot kuka_kr16_2: G-code is written for machine tools" in capsys.readouterr().err
+    assert not (files / "out").exists()

@@ -12,6 +12,7 @@ import pytest
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.result import CalibrationResult
+from workcal_wb.core.robots import forward
 from workcal_wb.core.toolpath import export, linearised, parse_gcode, read_gcode
 from program_checkers import check_fanuc
 
@@ -78,7 +79,7 @@ def parse_krl(text):
     for line in text.splitlines():
         if m := re.match(r"\s*\$VEL\.CP = " + NUMBER, line):
             speed = float(m.group(1)) * 60000
-        elif m := re.match(r"\s*(LIN|PTP) " + aggregate, line):
+        elif m := re.match(r"\s*(LIN|PTP) " + aggregate[:-2] + r"(?:, S \d+, T \d+)?\}", line):
             poses.append((base @ kuka(*map(float, m.groups()[1:])), speed if m.group(1) == "LIN" else RAPID_FEED))
     return poses
 
@@ -91,17 +92,21 @@ def parse_rapid(text):
     uframe = pose(*re.search(r"PERS wobjdata wobjWorkCal := \[FALSE,TRUE,\"\",\[" + xyz_q, text).groups())
     speeds = {name: float(v) * 60 for name, v in re.findall(r"CONST speeddata (\w+) := \[" + NUMBER, text)}
     return [(uframe @ pose(xyz, q), speeds[v])
-            for xyz, q, v in re.findall(r"Move[JL] \[" + xyz_q + r",\[0,0,0,0\],\[[^\]]*\]\], (\w+), \w+, "
-                                        r"tWorkCal\d+\\WObj:=wobjWorkCal;", text)]
+            for xyz, q, v in re.findall(r"Move[JL] \[" + xyz_q + r",\[-?\d+,-?\d+,-?\d+,\d\],\[[^\]]*\]\], (\w+), "
+                                        r"\w+, tWorkCal\d+\\WObj:=wobjWorkCal;", text)]
 
 
-def parse_urscript(text):
+def parse_urscript(text, robot=None):
+    """The poses in B; a first movej to joint values (radians) is turned into its flange pose by ``robot``'s
+    forward kinematics (the tests give no tool then)."""
     def pose(values):
         x, y, z, rx, ry, rz = map(float, values.split(","))
         return frames.from_rotvec([rx, ry, rz], np.array([x, y, z]) * 1000)
 
     base = pose(re.search(r"workcal_base = p\[([^\]]*)\]", text).group(1))
     poses = []
+    if joints := re.search(r"^  movej\(\[([^\]]*)\], a=", text, flags=re.M):
+        poses.append((forward(robot, np.degrees([float(v) for v in joints.group(1).split(",")])), RAPID_FEED))
     for move, values, v in re.findall(r"(movej|movel)\(pose_trans\(workcal_base, p\[([^\]]*)\]\), a=[\d.]+, "
                                       r"v=" + NUMBER, text):
         poses.append((base @ pose(values), RAPID_FEED if move == "movej" else float(v) * 60000))

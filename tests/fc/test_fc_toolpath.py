@@ -140,3 +140,18 @@ def test_a_comment_command_never_becomes_a_move():
     bad = [commands[0], Path.Command("G1\nG0 Z-500", {"X": 1.0})]
     with pytest.raises(InputError, match=r"'injected': line 2: G1 and G0 are both in the motion group"):
         fctp.read_toolpath(path_object(Path.Path(bad), "injected"))
+
+
+def test_a_recorded_export_names_its_robot_by_id_and_its_tool_by_six_numbers(job, tmp_path):
+    """What a macro holds (the robot's id, the tool as X, Y, Z, A, B, C) becomes the robot and the 4x4 TCP the
+    export checks the Job's program against; the program carries the configuration solved."""
+    from workcal_wb.core.robots import load_robot
+    from workcal_wb.core.toolpath import export
+
+    options = fctp.robot_options(robot="kuka_kr16_2", tool=[0, 0, 150, 0, 0, 0], machine="robot")
+    assert options["robot"] == load_robot("kuka_kr16_2") and options["machine"] == "robot"
+    np.testing.assert_allclose(options["tool"], frames.rigid(None, (0.0, 0.0, 150.0)))
+    out = tmp_path / "profile.src"
+    exported = export(fctp.read_toolpath(job), calibration(TURNED), "krl", out, **options)
+    assert exported.reach.reachable and "reach: checked for KUKA KR 16-2" in out.read_text()
+    assert fctp.robot_options() == {}

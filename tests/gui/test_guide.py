@@ -11,6 +11,7 @@ The tests share one document and run in file order; a failed step makes the late
 """
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -366,7 +367,26 @@ def test_08_export_with_the_machine_profile(step, shoot_window, check_page):
     # A robot program: the machine profile is the robot's, not to be chosen.
     page.set_options(fmt="krl", path=step["dir"] / "part.src")
     assert not page.machine.isEnabled() and page.machine_profile() == "robot"
+    assert page.robot.isVisible() and not page.tcp.isVisible()  # no robot chosen: no TCP to give
     assert page.export() is not None and (step["dir"] / "part.src").exists()
+    assert "reach not checked (no robot given)" in (step["dir"] / "part.src").read_text()
+    # The robot that runs it, with its TCP: the program is checked against it and takes its configuration.
+    assert [page.robot.itemData(i) for i in range(1, page.robot.count())] == [
+        "kuka_kr120_r2700_2", "kuka_kr16_2", "kuka_kr6_r700_sixx"]  # the KUKA robots only, for KRL
+    page.set_options(robot="kuka_kr16_2", tool="0, 0, 150, 0, 0, 0")
+    assert page.tcp.isVisible() and page.export() is not None
+    text = (step["dir"] / "part.src").read_text()
+    assert ";reach: checked for KUKA KR 16-2 (kuka_kr16_2) with the TCP X 0.000 Y 0.000 Z" in text
+    assert re.search(r"^PTP \{X [^}]*, S [0-7], T \d+\}$", text, flags=re.M)
+    # A robot too small for where the part sits: refused, the question says why and where to put the part.
+    page.set_options(robot="kuka_kr6_r700_sixx")
+    asked = []
+    assert page.export(confirm=lambda reason: asked.append(reason) or False) is None
+    assert "cannot follow this program" in asked[0] and "move the part" in asked[0] and "--" not in asked[0]
+    assert ";reach: checked for KUKA KR 16-2" in (step["dir"] / "part.src").read_text()  # left as it was
+    page.set_options(tool="0, 0, 150")
+    assert page.export() is None  # a TCP of three numbers: refused naming the field
+    page.set_options(robot="kuka_kr16_2", tool="0, 0, 150, 0, 0, 0")
     check_page(panel, "export")
     shoot_window("08_export")
     stop_recording()
@@ -384,6 +404,7 @@ def test_09_the_recorded_macro_replays_headless(step, output_dir):
         assert call in text, f"{call} was not recorded"
     assert "workcal_wb.gui" not in text
     assert "scanner_origin=(0.0, 0.0, 0.0)" in text and f"up=({step['up'][0]!r}," in text  # the advanced options
+    assert "robot='kuka_kr16_2', tool=[0.0, 0.0, 150.0, 0.0, 0.0, 0.0]" in text  # the export's robot and TCP
     (output_dir / f"{MACRO}.FCMacro").write_text(text, encoding="utf-8")
     result = step["dir"] / "replayed.json"
     script = step["dir"] / "replay.py"

@@ -78,6 +78,31 @@ def envelope(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def robot(text: str):
+    """A built-in robot's id or a robot JSON file (robots.load_robot): every field checked."""
+    from workcal_wb.core.robots import load_robot
+
+    try:
+        return load_robot(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def tool_frame(text: str):
+    """A tool as X,Y,Z,A,B,C: the TCP in the robot's flange frame, mm and degrees, R = Rz(A) Ry(B) Rx(C)
+    (KUKA's convention); a 4x4 transform."""
+    from workcal_wb.core.robots.model import xyzabc_transform
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 6 or not all(map(math.isfinite, values)):
+        raise argparse.ArgumentTypeError(f"expected six numbers X,Y,Z,A,B,C (mm and degrees, the TCP in the flange "
+                                         f"frame), got {text!r}")
+    return xyzabc_transform(values)
+
+
 def input_file(text: str) -> str:
     """An existing, readable regular file (not a folder, pipe or device)."""
     try:

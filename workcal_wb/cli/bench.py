@@ -22,11 +22,11 @@ def add_parser(subparsers):
                     "5M- and 20M-point files), the verdicts table (real Stanford dragon and "
                     "bunny scans, simulated nearly symmetric parts: how often each status comes with the right pose), the "
                     "whole-process table (match and calibrate as processes, cold and warm, beside stock Open3D and "
-                    "KISS-Matcher + small_gicp), the scenes table and the L-block on its foot's. "
+                    "KISS-Matcher + small_gicp), the scenes table, the L-block on its foot's and the reach check's. "
                     "Exit status 1 when WorkCal misses a target or reports a wrong pose as ok.")
     p.add_argument("--out", required=True, metavar="FILE", help="Markdown file to write (e.g. docs/benchmarks.md)")
     p.add_argument("--quick", action="store_true", help="a small subset, for a smoke test (a minute or two)")
-    p.add_argument("--only", choices=("matcher", "large", "processes", "verdicts", "scenes", "lblock"),
+    p.add_argument("--only", choices=("matcher", "large", "processes", "verdicts", "scenes", "lblock", "reach"),
                    help="run only this table and replace its section of FILE (matcher: WorkCal's matcher beside "
                         "stock Open3D on the bunny and simulated cases, with the G-code throughput; verdicts: how often each match status "
                         "comes with the right pose, on real scans and nearly symmetric parts; scenes: cell scans in "
@@ -34,7 +34,8 @@ def add_parser(subparsers):
                         "standing on its foot (legs 80 and 90 mm) beside the bunny, any view, mixed pixels, calibrated "
                         "with automatic regions; processes: the "
                         "match and calibrate commands as whole processes, cold and warm, beside the peers; large: "
-                        "match as a whole process on 5M- and 20M-point scan files, written once into build/)")
+                        "match as a whole process on 5M- and 20M-point scan files, written once into build/; reach: "
+                        "the robot reach check on a million poses beside py-opw-kinematics' inverse kinematics)")
     p.add_argument("--seed", type=seed, default=0, help="seed for the case generation and the matchers")
     add_runner_options(p, "verdicts' and scenes' matches and calibrations")
     p.add_argument("--shared", metavar="DIR", type=Path,

@@ -9,14 +9,14 @@ import numpy as np
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
 from workcal_wb.cli.arguments import (UNITS, add_cache_options, finite, input_file, is_cad_file, keep_models,
                                       model_cache, positive, read_cad_model, seed)
-from workcal_wb.cli.toolpath import add_machine_options, read_options, way_out
+from workcal_wb.cli.toolpath import add_machine_options, forced_warnings, read_options, robot_options, way_out
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
-from workcal_wb.core.result import FAILED, OK
+from workcal_wb.core.result import FAILED
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
@@ -118,7 +118,10 @@ def warn(clouds) -> None:
 
 def run(args) -> int:
     from workcal_wb.core.report import write_report
+    from workcal_wb.core.toolpath.reach import check_controller
 
+    if args.toolpath:  # a robot that cannot run the format is said before the scan is read, not after calibrating
+        check_controller(args.robot, FORMATS[args.format])
     inputs = [*args.scan, args.workpiece, args.reference, args.toolpath, args.workpiece_indices, args.reference_indices]
     cache = model_cache(args)
     with OutputFolder(args.out, "calibrate", OUTPUTS, keep=[p for p in inputs if p]) as outputs:
@@ -136,7 +139,7 @@ def run(args) -> int:
 
         # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
-        refused = _program(args, toolpath, result, outputs, workpiece)
+        refused, forced = _program(args, toolpath, result, outputs, workpiece)
         outputs.commit(result.status)
         region = result.regions.get("workpiece")
         try:
@@ -150,24 +153,24 @@ def run(args) -> int:
     print(f"wrote {args.out}: {', '.join(manifest['files'])}")
     if refused:
         print(f"workcal calibrate: toolpath not written: {refused}", file=sys.stderr)
-    elif toolpath is not None and result.status != OK:
-        print(f"workcal calibrate: warning: FORCED program from a {result.status!r} calibration", file=sys.stderr)
+    for line in forced:
+        print(f"workcal calibrate: warning: {line}", file=sys.stderr)
     keep_models(cache)
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
 
-def _program(args, toolpath, result, outputs, workpiece) -> str | None:
-    """Stage the calibrated program; the reason when it is refused (or no toolpath was given: None)."""
+def _program(args, toolpath, result, outputs, workpiece) -> tuple[str | None, list]:
+    """Stage the calibrated program: (the reason when it is refused, else None; the reasons it was forced)."""
     if toolpath is None:
-        return None
+        return None, []
     if result.W is None:
-        return "the calibration found no W"
+        return "the calibration found no W", []
     name = f"{PROGRAM_STEM}{FORMATS[args.format].EXTENSION}"
     try:
-        export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
-               vertical_tol_deg=args.vertical_tol, rotary=args.rotary, fanuc_config=args.fanuc_config,
-               calibration_source=str(Path(args.out) / "result.json"), workpiece_model=workpiece,
-               path_reach_mm=args.path_reach)
+        job = export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
+                     vertical_tol_deg=args.vertical_tol, rotary=args.rotary, fanuc_config=args.fanuc_config,
+                     calibration_source=str(Path(args.out) / "result.json"), workpiece_model=workpiece,
+                     path_reach_mm=args.path_reach, **robot_options(args))
     except ExportRefused as exc:
-        return f"{exc}{way_out(exc)}"
-    return None
+        return f"{exc}{way_out(exc)}", []
+    return None, forced_warnings(job)

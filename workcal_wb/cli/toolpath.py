@@ -7,7 +7,7 @@ import sys
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
 from workcal_wb.cli.arguments import (UNITS, envelope, finite, input_file, is_cad_file, non_negative, positive,
-                                      program_lines, read_cad_model)
+                                      program_lines, read_cad_model, robot, tool_frame)
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
@@ -21,7 +21,7 @@ from workcal_wb.core.toolpath.exporters.krl import MODES as KRL_MODES
 from workcal_wb.core.toolpath.gcode import BLOCK_DELETE, DWELL_P
 from workcal_wb.core.toolpath.orientation import ROTARY
 from workcal_wb.core.toolpath.safety import (DEFAULT_FANUC_CONFIG, DEFAULT_PATH_REACH_MM, DEFAULT_VERTICAL_TOL_DEG,
-                                             PathOffModel)
+                                             PathOffModel, ReachRefused)
 
 
 def add_parser(subparsers):
@@ -30,7 +30,7 @@ def add_parser(subparsers):
         description="Read a toolpath in workpiece coordinates (G-code), move it into the robot base frame with "
                     "W from a calibration result, and write KRL, RAPID, URScript, Fanuc LS, G-code or CSV. "
                     "Nothing is written when the calibration failed its gates (unless --force), when a number "
-                    "is not finite, or when a point leaves the --envelope.")
+                    "is not finite, when a point leaves the --envelope, or when the --robot cannot follow it.")
     p.add_argument("--in", dest="input", required=True, metavar="FILE", type=input_file,
                    help="G-code file (.nc, .ngc, .gcode, ...)")
     p.add_argument("--calibration", required=True, metavar="FILE", type=input_file,
@@ -77,9 +77,20 @@ def add_machine_options(p) -> None:
     p.add_argument("--path-reach", type=positive, default=DEFAULT_PATH_REACH_MM, metavar="MM",
                    help="how far the toolpath's cutting moves may run from the workpiece model's surface, as their "
                         f"median, before it is taken for another part's toolpath (default {DEFAULT_PATH_REACH_MM:g} mm)")
+    p.add_argument("--robot", type=robot, metavar="NAME_OR_JSON",
+                   help="the robot that runs the program: a built-in id (workcal robots lists them) or a robot JSON "
+                        "file (docs/robots.md). The program is refused when the robot cannot follow it (out of "
+                        "reach, past a joint limit, a configuration change or a singularity inside a linear move), "
+                        "with where to put the part instead, and its first move carries the configuration solved "
+                        "(KRL S and T, RAPID confdata with ConfL on, Fanuc CONFIG, URScript movej joints); without "
+                        "it the program says 'reach not checked'")
+    p.add_argument("--tool", type=tool_frame, default=None, metavar="X,Y,Z,A,B,C",
+                   help="the TCP in the robot's flange frame for --robot: mm and degrees, R = Rz(A) Ry(B) Rx(C) "
+                        "(KUKA's convention); default 0,0,0,0,0,0, the flange itself")
     p.add_argument("--fanuc-config", default=DEFAULT_FANUC_CONFIG, metavar="'F U T, 0, 0, 0'",
-                   help="Fanuc: the robot's configuration at the workpiece (flip, elbow, base side, turns of J1 J4 "
-                        f"J6), written on every position; WorkCal has no robot kinematics (default '{DEFAULT_FANUC_CONFIG}')")
+                   help="Fanuc without --robot: the robot's configuration at the workpiece (flip, elbow, base side, "
+                        f"turns of J1 J4 J6), written on every position (default '{DEFAULT_FANUC_CONFIG}'); with "
+                        "--robot every position's configuration comes from its solution")
     p.add_argument("--block-delete", choices=BLOCK_DELETE,
                    help="the block-delete switch for '/' blocks: on skips them, off runs them "
                         "(required when the file has them)")
@@ -92,7 +103,19 @@ def way_out(refusal: ExportRefused) -> str:
     if isinstance(refusal, PathOffModel):
         return (f". If this toolpath is this part's (a roughing pass far into the stock), allow it with --path-reach "
                 f"{math.ceil(refusal.median_mm * 1.2)}")
+    if isinstance(refusal, ReachRefused):
+        return ". To write it anyway, force it (--force): the program then says FORCED and why"
     return ""
+
+
+def robot_options(args) -> dict:
+    """The robot and tool export settings from the shared options."""
+    return {"robot": args.robot, **({} if args.tool is None else {"tool": args.tool})}
+
+
+def forced_warnings(job) -> list[str]:
+    """One line per reason an export was forced (the first line of each part of its FORCED banner)."""
+    return [line for line in job.banner if line.startswith("FORCED EXPORT")]
 
 
 def read_options(args) -> dict:
@@ -140,7 +163,7 @@ def run(args) -> int:
                             machine=args.machine, vertical_tol_deg=args.vertical_tol, rotary=args.rotary,
                             max_lines=args.max_lines, fanuc_config=args.fanuc_config,
                             calibration_source=args.calibration, workpiece_model=_workpiece(args),
-                            path_reach_mm=args.path_reach)
+                            path_reach_mm=args.path_reach, **robot_options(args))
     for warning in toolpath.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     try:
@@ -148,8 +171,8 @@ def run(args) -> int:
     except ExportRefused as exc:
         print(f"workcal toolpath: refused: {exc}{way_out(exc)}", file=sys.stderr)
         return EXIT_FAILED
-    if job.forced:
-        print(f"workcal toolpath: warning: FORCED export of a {calibration.status!r} calibration", file=sys.stderr)
+    for line in forced_warnings(job):
+        print(f"workcal toolpath: warning: {line}", file=sys.stderr)
     print(f"wrote {args.out}: {FORMATS[fmt].NAME} for {job.machine}, {len(toolpath)} moves from {args.input}, "
           f"calibration {calibration.status}")
     return EXIT_OK

@@ -252,25 +252,40 @@ def calibrated_paths(calibration) -> list:
 
 
 def check_export(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options) -> None:
-    """Every refusal ``export_program`` would raise (CalibrationNotOk, ToolTilted, ExportRefused,
-    InputError), without writing anything (the GUI checks before it records the export)."""
-    from workcal_wb.core.toolpath.exporters import machine_for
+    """Every refusal ``export_program`` would raise (CalibrationNotOk, ToolTilted, ReachRefused,
+    ExportRefused, InputError), without writing anything (the GUI checks before it records the export)."""
+    from workcal_wb.core.toolpath.exporters import checked_export
     from workcal_wb.fc.calibration_object import result_of
     from workcal_wb.fc.setup import toolpath_of
 
     source = source if source is not None else toolpath_of(calibration.Document)
     fmt = fmt or format_for(path)
-    options = {**held_to_workpiece(calibration), **options}
+    options = {**held_to_workpiece(calibration), **robot_options(**options)}
     options = ExportOptions(force=force, calibration_source=f"calibration {calibration.Label!r}", **options)
-    checked_placement(read_source(source), result_of(calibration), options, machine_for(fmt, options.machine))
+    checked_export(read_source(source), result_of(calibration), fmt, options)
+
+
+def robot_options(robot=None, tool=None, **options) -> dict:
+    """Export options with ``robot`` given as a built-in id or a robot file's path (as a macro records it)
+    loaded, and ``tool`` given as X, Y, Z, A, B, C (mm, degrees, R = Rz(A) Ry(B) Rx(C)) made a 4x4."""
+    from workcal_wb.core.robots import load_robot
+    from workcal_wb.core.robots.model import xyzabc_transform
+
+    if isinstance(robot, (str, os.PathLike)):
+        robot = load_robot(os.fspath(robot))
+    if tool is not None and np.asarray(tool).shape == (6,):
+        tool = xyzabc_transform(tool)
+    return {**options, **({} if robot is None else {"robot": robot}), **({} if tool is None else {"tool": tool})}
 
 
 def export_program(calibration, path, fmt: str | None = None, source=None, *, force: bool = False, **options):
     """Write the document's toolpath (or ``source``) through ``calibration``'s W as a robot or CNC
     program; returns the core's export job.  ``fmt``: krl, rapid, urscript, fanuc, gcode or csv
     (default: from the file extension); ``options`` go to core.toolpath.export (machine,
-    vertical_tol_deg, rotary, envelope, krl_mode, rapid_feed_mm_min, chord_tol_mm, ...).  Nothing is
-    written when the export is refused (CalibrationNotOk unless ``force``, ToolTilted, ExportRefused)."""
+    vertical_tol_deg, rotary, envelope, krl_mode, rapid_feed_mm_min, chord_tol_mm, robot (a built-in
+    robot's id, a robot file's path or a core.robots.Robot), tool (the TCP in its flange frame: X, Y, Z,
+    A, B, C in mm and degrees, or a 4x4), ...).  Nothing is written when the export is refused
+    (CalibrationNotOk or ReachRefused unless ``force``, ToolTilted, ExportRefused)."""
     from workcal_wb.fc.calibration_object import result_of
     from workcal_wb.fc.setup import toolpath_of
 
@@ -278,7 +293,7 @@ def export_program(calibration, path, fmt: str | None = None, source=None, *, fo
     result = result_of(calibration)
     toolpath = read_source(source)
     fmt = fmt or format_for(path)
-    options = {**held_to_workpiece(calibration), **options}
+    options = {**held_to_workpiece(calibration), **robot_options(**options)}
     job = export(toolpath, result, fmt, path, force=force, calibration_source=f"calibration {calibration.Label!r}",
                  **options)
     text = (f"WorkCal: wrote {path}: {FORMATS[fmt].NAME} for {job.machine}, {len(toolpath)} moves from "

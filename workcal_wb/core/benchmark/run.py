@@ -189,8 +189,8 @@ def _in_child(target, *args):
 def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print,
         only: str | None = None, runner=None) -> Report:
     """Run both methods (alternating, ``rounds`` times each), then the other tables, and write the
-    Markdown to ``out``; with ``only`` ("matcher", "large", "processes", "verdicts" or "scenes") run
-    just that table and replace its part of ``out``.  ``runner`` (parallel.Runner) is where the
+    Markdown to ``out``; with ``only`` ("matcher", "large", "processes", "verdicts", "scenes", "lblock"
+    or "reach") run just that table and replace its part of ``out``.  ``runner`` (parallel.Runner) is where the
     verdicts' and scenes' batches run (default: here, one after the other); the timed tables always
     run one case at a time."""
     from ..parallel import Runner
@@ -201,7 +201,8 @@ def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=
               "processes": lambda: _processes(shared, seed, quick, log),
               "verdicts": lambda: _verdicts(shared, seed, quick, log, runner),
               "scenes": lambda: _scenes(shared, seed, log, runner),
-              "lblock": lambda: _scenes(shared, seed, log, runner, upright_l=True)}
+              "lblock": lambda: _scenes(shared, seed, log, runner, upright_l=True),
+              "reach": lambda: _reach(log)}
     if only is not None:
         section, missed = tables[only]()
         previous = Path(out).read_text(encoding="utf-8") if Path(out).is_file() else ""
@@ -243,8 +244,9 @@ def _matcher(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, lis
 VERDICTS_HEADING = "## Verdicts"
 PROCESSES_HEADING = "## Whole processes"
 LARGE_HEADING = "## Large scans"
+REACH_HEADING = "## Reach check"
 # After the match table, in this order.
-SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING, UPRIGHT_L_HEADING)
+SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING, UPRIGHT_L_HEADING, REACH_HEADING)
 
 
 def _with_section(previous: str, section: str) -> str:
@@ -278,6 +280,13 @@ def _large(seed: int, quick: bool, log) -> tuple[str, list]:
     from . import large
 
     return large.run(seed, quick, log)
+
+
+def _reach(log) -> tuple[str, list]:
+    """The reach-check section (see reach.py): check_reach on a million poses beside py-opw-kinematics."""
+    from . import reach
+
+    return reach.run(log)
 
 
 def _verdicts(shared: Path | None, seed: int, quick: bool, log, runner) -> tuple[str, list]:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -61,6 +61,16 @@ class CalibrationNotOk(ExportRefused):
     def __init__(self, message: str, status: str):
         super().__init__(message)
         self.status = status
+
+
+class ReachRefused(ExportRefused):
+    """The robot cannot follow the program (robots/reach.py): ``report`` says where and why (its
+    ``problem`` code), ``suggestion`` (robots.placement.PartMove, or None) where to put the part
+    instead.  Forcing the export overrides it, as it does a calibration that is not ok."""
+
+    def __init__(self, message: str, report, suggestion=None):
+        super().__init__(message)
+        self.report, self.suggestion = report, suggestion
 
 
 class ToolTilted(ExportRefused):
@@ -143,6 +153,8 @@ class ExportOptions:
     calibration_source: str = "calibration"
     workpiece_model: object = None  # the workpiece model X-A (a Cloud or a prepared SurfaceModel), to hold the path to
     path_reach_mm: float = DEFAULT_PATH_REACH_MM
+    robot: object = None  # robots.Robot whose reach a robot program is checked against (None: not checked)
+    tool: np.ndarray = field(default_factory=lambda: np.eye(4))  # the TCP in the robot's flange frame, 4x4, mm
 
     def check(self) -> None:
         if not (math.isfinite(self.chord_tol_mm) and self.chord_tol_mm >= MIN_CHORD_TOL_MM):
@@ -162,6 +174,17 @@ class ExportOptions:
         if not (math.isfinite(self.path_reach_mm) and self.path_reach_mm > 0):
             raise InputError(f"the toolpath's reach from the workpiece model must be a positive number of mm, "
                              f"not {self.path_reach_mm}")
+        try:
+            tool = frames.as_transform(self.tool, "tool")
+        except (ValueError, TypeError) as exc:
+            raise InputError(f"the tool (the TCP in the robot's flange frame) is not a rigid 4x4 transform: "
+                             f"{exc}") from None
+        if not np.linalg.norm(tool[:3, 3]) <= SANITY_MM:
+            raise InputError(f"the tool (the TCP in the robot's flange frame) is {np.linalg.norm(tool[:3, 3]):.6g} mm "
+                             f"from the flange, more than any tool ({SANITY_MM / 1000:g} m): check the units")
+        if self.robot is not None and self.fanuc_config != DEFAULT_FANUC_CONFIG:
+            raise InputError(f"Fanuc configuration {self.fanuc_config!r} given with robot {self.robot.id}: with a "
+                             "robot every position's configuration comes from its solution; give one or the other")
         if self.max_lines is not None and self.max_lines < MIN_PART_LINES:
             raise InputError(f"lines per program part (--max-lines) must be at least {MIN_PART_LINES}, "
                              f"not {self.max_lines}")
@@ -324,11 +347,14 @@ def check_on_model(toolpath: Toolpath, model, reach_mm: float, chord_tol_mm: flo
 @dataclass(frozen=True)
 class Placement:
     """What the checks of an export found: the X -> B transform to use, whether the export goes ahead only
-    because it was forced, and the facts the program's header states."""
+    because it was forced (``banner``: the lines that say why, first in the header), the facts the
+    program's header states, and the robot's reach (robots.reach.ReachReport, None when not checked)."""
 
     transform: np.ndarray
     forced: bool
     notes: tuple = ()
+    banner: tuple = ()
+    reach: object = None
 
 
 def checked_placement(toolpath: Toolpath, calibration: CalibrationResult, options: ExportOptions,
@@ -355,4 +381,4 @@ def checked_placement(toolpath: Toolpath, calibration: CalibrationResult, option
         note = "toolpath on the workpiece model: not checked (no model given)"
     else:
         note = check_on_model(toolpath, options.workpiece_model, options.path_reach_mm, options.chord_tol_mm)
-    return Placement(T, forced, (note,))
+    return Placement(T, forced, (note,), tuple(forced_banner(calibration)) if forced else ())

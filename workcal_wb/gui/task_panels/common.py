@@ -175,35 +175,45 @@ def calibration_for(doc):
     return found[-1]
 
 
-def confirm_force(reason: str) -> bool:
-    """Ask whether to go on with a calibration that did not pass its gates (False when not interactive)."""
+def confirm_force(reason: str, reach: bool = False) -> bool:
+    """Ask whether to go on with a calibration that did not pass its gates, or (``reach``) with a program
+    the robot cannot follow (False when not interactive)."""
     if not (INTERACTIVE and FreeCAD.GuiUp):
         return False
     box = QtWidgets.QMessageBox(main_window())
     box.setIcon(QtWidgets.QMessageBox.Warning)
-    box.setWindowTitle(translate("WorkCal", "Calibration not ok"))
-    box.setText(translate("WorkCal", "The calibration did not pass its quality gates."))
-    box.setInformativeText(reason + "\n\n" + translate(
-        "WorkCal", "Use it anyway? The result is marked FORCED; check the workpiece position by hand before "
-                   "running the program."))
+    if reach:
+        box.setWindowTitle(translate("WorkCal", "Robot cannot follow the program"))
+        box.setText(translate("WorkCal", "The robot cannot follow this program where the part is."))
+        question = translate("WorkCal", "Write it anyway? The program is marked FORCED; check it in simulation, or "
+                                        "by hand at low speed, before running it.")
+    else:
+        box.setWindowTitle(translate("WorkCal", "Calibration not ok"))
+        box.setText(translate("WorkCal", "The calibration did not pass its quality gates."))
+        question = translate("WorkCal", "Use it anyway? The result is marked FORCED; check the workpiece position by "
+                                        "hand before running the program.")
+    box.setInformativeText(reason + "\n\n" + question)
     box.setStandardButtons(QtWidgets.QMessageBox.Yes | QtWidgets.QMessageBox.No)
     box.setDefaultButton(QtWidgets.QMessageBox.No)
     return run_modal(box) == QtWidgets.QMessageBox.Yes
 
 
 def with_force(action, confirm=None):
-    """Run ``action(force=False)``; when the calibration is refused for its status, ask ``confirm(reason)``
-    (default: a message box) and, if confirmed, run ``action(force=True)``.  Returns the action's result
-    or None.  Other refusals (envelope, tilt, non-finite numbers) propagate: forcing does not help there."""
-    from workcal_wb.core.toolpath import CalibrationNotOk
+    """Run ``action(force=False)``; when it is refused for the calibration's status or for the robot's
+    reach, ask ``confirm(reason)`` (default: a message box) and, if confirmed, run ``action(force=True)``.
+    Returns the action's result or None.  Other refusals (envelope, tilt, non-finite numbers) propagate:
+    forcing does not help there."""
+    from workcal_wb.core.toolpath import CalibrationNotOk, ReachRefused
 
     try:
         return action(force=False)
-    except CalibrationNotOk as exc:
-        if not (confirm or confirm_force)(str(exc)):
+    except (CalibrationNotOk, ReachRefused) as exc:
+        reach = isinstance(exc, ReachRefused)
+        if not (confirm or (lambda reason: confirm_force(reason, reach)))(str(exc)):
             warning(str(exc))
             return None
-    warning(translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))
+    warning(translate("WorkCal", "writing a program the robot cannot follow (FORCED)") if reach else
+            translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))
     return action(force=True)
 
 

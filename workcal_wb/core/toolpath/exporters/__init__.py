@@ -1,9 +1,12 @@
 """One module per target format, each with NAME, EXTENSION, MACHINES and ``render(job)``; ``export`` runs them.
 
+Each module also says which robots' controllers run its programs (``CONTROLLERS``, robots.model's
+codes; none for G-code).
 ``render(job)`` yields the files of the program, ``(path, chunks)``: for a program over the controller's
 size limit its numbered parts first, then the main program at ``job.out``.
-``export`` is the only way a program reaches the disk: checks first (calibration gates, sanity bound,
-finite numbers, work envelope in B, the machine's axes, the path on the workpiece model), then each file is written atomically in plain
+``export`` is the only way a program reaches the disk: checks first (``checked_export``: calibration gates,
+sanity bound, finite numbers, work envelope in B, the machine's axes, the path on the workpiece model, the
+robot's reach), then each file is written atomically in plain
 ASCII (``common.ascii_text``), parts
 first and the main program last; a failure removes what this export wrote, and parts left by an
 earlier, longer export of the same program are removed.
@@ -17,7 +20,8 @@ from ...atomic import atomic_open
 from ...errors import InputError
 from ...result import CalibrationResult
 from ..model import Toolpath
-from ..safety import ExportOptions, checked_placement
+from ..reach import check_controller, checked_reach
+from ..safety import ExportOptions, Placement, checked_placement
 from . import common, csv, fanuc, gcode, krl, rapid, urscript
 
 FORMATS = {"krl": krl, "rapid": rapid, "urscript": urscript, "fanuc": fanuc, "gcode": gcode, "csv": csv}
@@ -43,18 +47,30 @@ def machine_for(fmt: str, machine: str | None) -> str:
     return machine
 
 
+def checked_export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, options: ExportOptions) -> Placement:
+    """Every check ``export`` makes before it writes, in one place (FreeCAD checks with it before it
+    records an export): ``safety.checked_placement``, then for a robot program the robot's reach
+    (``reach.checked_reach``); refuses (ExportRefused, InputError) as ``export`` would."""
+    if fmt not in FORMATS:
+        raise InputError(f"unknown output format {fmt!r}; use one of {', '.join(FORMATS)}")
+    machine = machine_for(fmt, options.machine)
+    check_controller(options.robot, FORMATS[fmt])
+    checked = checked_placement(toolpath, calibration, options, machine)
+    if machine != "robot":
+        return checked
+    return checked_reach(toolpath, calibration, checked, options)
+
+
 def export(toolpath: Toolpath, calibration: CalibrationResult, fmt: str, out, options: ExportOptions | None = None,
            **settings) -> common.ExportJob:
     """Write ``toolpath`` (workpiece frame, mm) as ``fmt`` to ``out``; refuses (ExportRefused) before writing.
 
     ``settings`` are ``ExportOptions`` fields (force, envelope, machine, ...), for callers without one."""
-    if fmt not in FORMATS:
-        raise InputError(f"unknown output format {fmt!r}; use one of {', '.join(FORMATS)}")
     options = options or ExportOptions(**settings)
-    machine = machine_for(fmt, options.machine)
-    checked = checked_placement(toolpath, calibration, options, machine)
-    job = common.ExportJob(toolpath, calibration, checked.transform, checked.forced, Path(out), options, machine,
-                           notes=list(checked.notes))
+    checked = checked_export(toolpath, calibration, fmt, options)
+    job = common.ExportJob(toolpath, calibration, checked.transform, checked.forced, Path(out), options,
+                           machine_for(fmt, options.machine), notes=list(checked.notes), banner=list(checked.banner),
+                           reach=checked.reach)
     files = FORMATS[fmt].render(job)
     written = []
     try:

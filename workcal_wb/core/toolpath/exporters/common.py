@@ -40,6 +40,14 @@ class ExportJob:
     options: ExportOptions
     machine: str
     notes: list = field(default_factory=list)  # facts found while rendering, for the header
+    banner: list = field(default_factory=list)  # why the export was forced (safety.Placement.banner)
+    reach: object = None  # robots.reach.ReachReport of options.robot, None when not checked
+
+    @property
+    def solved(self):
+        """The reach check's report when the robot follows the program: its configuration at every target
+        is then written into the program; None otherwise (no robot, or a forced export it cannot follow)."""
+        return self.reach if self.reach is not None and self.reach.reachable else None
 
     @property
     def chord_tol_mm(self) -> float:
@@ -82,7 +90,7 @@ def placement_name(job: ExportJob) -> str:
 
 def header_lines(job: ExportJob, format_name: str, notes: list[str]) -> list[str]:
     """The comment lines every exported file starts with (FORCED banner first when forced)."""
-    lines = forced_banner(job.calibration) if job.forced else []
+    lines = list(job.banner) or (forced_banner(job.calibration) if job.forced else [])
     lines += [f"WorkCal {__version__} toolpath export to {format_name}: {job.out.name}",
               f"toolpath: {job.toolpath.source}, {len(job.toolpath)} moves, machine {job.machine}", *notes,
               *job.notes, "W = ^B X, the workpiece frame X in the robot base frame B, 4x4, mm:",

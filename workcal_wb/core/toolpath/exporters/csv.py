@@ -9,6 +9,7 @@ from . import common
 
 NAME, EXTENSION = "CSV poses", ".csv"
 MACHINES = ("robot",)
+CONTROLLERS = ("kuka", "abb", "fanuc", "ur")  # poses any robot's reach can be checked for
 COLUMNS = "index,kind,x_mm,y_mm,z_mm,qw,qx,qy,qz,a_deg,b_deg,c_deg,feed_mm_min,source_line"
 
 

@@ -4,17 +4,20 @@
 (line number, colon, motion type; other instructions after two spaces), remarks of at most
 ``REMARK_WIDTH`` characters, ``UFRAME_NUM=0`` (positions in the world frame = the robot base frame B)
 and ``UTOOL_NUM`` per CAM tool, a joint move to the first point, linear moves, the CAM file's events
-(remark, MESSAGE and PAUSE; WAIT for a dwell; UTOOL_NUM for a new tool), ``/POS`` and ``/END``.  Over
+(remark, MESSAGE and PAUSE; WAIT for a dwell; UTOOL_NUM for a new tool), ``/POS`` (each position's
+CONFIG from the reach check's solution when a robot is given, else ``--fanuc-config``) and ``/END``.  Over
 ``MAX_LINES`` lines the moves go into programs ``NAME_001.ls`` ... that ``NAME`` calls in order.
 """
 from __future__ import annotations
 
+from ...robots.configuration import fanuc_config
 from ..orientation import fanuc_wpr_deg
 from ..safety import numbers
 from . import common
 
 NAME, EXTENSION = "Fanuc LS", ".ls"
 MACHINES = ("robot",)
+CONTROLLERS = ("fanuc",)  # the robots whose controller runs this program (robots.model.CONTROLLERS)
 MAX_NAME = 32  # program names: at most 36 characters, "_001" for parts
 MAX_LINES = 9999  # /MN lines per program, as controllers and RoboDK's Fanuc post cap them
 MAX_SPEED_MM_S = 2000.0  # linear speed limit (12000 cm/min)
@@ -24,11 +27,11 @@ JOINT_SPEED = "20%"
 DATE = "DATE 26-01-01  TIME 00:00:00"  # fixed, so an export repeats to the byte
 
 
-def positions_text(rotation, position, tools, config: str) -> list[str]:
-    """The /POS entries P[1..N] in order."""
+def positions_text(rotation, position, tools, configs) -> list[str]:
+    """The /POS entries P[1..N] in order, ``configs`` one per position."""
     xyz, wpr = numbers(position, 3), numbers(fanuc_wpr_deg(rotation), 4)
     out = []
-    for i, tool in enumerate(tools):
+    for i, (tool, config) in enumerate(zip(tools, configs)):
         x, y, z = xyz[3 * i:3 * i + 3]
         w, p, r = wpr[3 * i:3 * i + 3]
         out += [f"P[{i + 1}]{{", "   GP1:", f"\tUF : 0, UT : {tool},\t\tCONFIG : '{config}',",
@@ -72,13 +75,20 @@ def render(job: common.ExportJob):
     """The main program (and its parts, when over the line limit)."""
     name = common.program_name(job, MAX_NAME, must_match_file=True).upper()
     path = common.robot_path(job, in_base_frame=True, max_speed_mm_s=MAX_SPEED_MM_S)
+    if job.solved is None:
+        configs = [job.options.fanuc_config] * len(path)
+        configuration = (f"configuration: CONFIG '{job.options.fanuc_config}' on every position (no robot given to "
+                         "solve it: set the robot's configuration at the workpiece with --fanuc-config)")
+    else:
+        configs = list(fanuc_config(job.options.robot, job.solved.joints))
+        configuration = ("configuration: each position's CONFIG (flip, elbow, base side, turns of J1 J4 J6) from the "
+                         "reach check's solution")
     first_tool = common.first_tool(path)
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {first_tool})
     notes = ["units: mm, speeds in cm/min (whole numbers: the controller's resolution)",
              "angles: W, P, R in degrees, fixed axes X then Y then Z (R = Rz(R) Ry(P) Rx(W))",
              "positions: robot base frame B as the world frame (UFRAME 0)",
-             f"configuration: CONFIG '{job.options.fanuc_config}' on every position (WorkCal has no robot "
-             "kinematics: set the robot's configuration at the workpiece with --fanuc-config)",
+             configuration,
              "termination: CNT0, FINE where the robot stops", *common.robot_notes(job, "cm/min"),
              f"PLACEHOLDERS to fill: UTOOL {', '.join(map(str, tools))} = the spindle's TCP with that tool, "
              "Z along the tool into the part"]
@@ -100,14 +110,14 @@ def render(job: common.ExportJob):
     parts = list(common.packed(_split_remarks(groups), limit))
     if len(parts) == 1 and len(head) + len(parts[0]) <= (job.options.max_lines or MAX_LINES):
         yield job.out, [_program(name, comment, head + _positions_of(parts[0])[0],
-                                 positions_text(*_targets(path, tool_of, _positions_of(parts[0])[1]), job.options.fanuc_config))]
+                                 positions_text(*_targets(path, tool_of, configs, _positions_of(parts[0])[1])))]
         return
     for index, part in enumerate(parts, start=1):
         part_name = common.part_name(name, index)
         body, moves = _positions_of(part)
         note = remarks(f"WorkCal part {index} of {name}, result sha256 {common.fingerprint(job)}")
         yield (common.part_path(job, index),
-               [_program(part_name, comment, note + body, positions_text(*_targets(path, tool_of, moves), job.options.fanuc_config))])
+               [_program(part_name, comment, note + body, positions_text(*_targets(path, tool_of, configs, moves)))])
     calls = [f"CALL {common.part_name(name, i)} ;" for i in range(1, len(parts) + 1)]
     yield job.out, [_program(name, comment, head + calls, [])]
 
@@ -131,5 +141,5 @@ def _positions_of(part: list) -> tuple[list, list]:
     return body, moves
 
 
-def _targets(path, tool_of: list, moves: list):
-    return path.rotation[moves], path.position[moves], [tool_of[i] for i in moves]
+def _targets(path, tool_of: list, configs: list, moves: list):
+    return path.rotation[moves], path.position[moves], [tool_of[i] for i in moves], [configs[i] for i in moves]

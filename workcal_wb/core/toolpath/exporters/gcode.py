@@ -25,6 +25,7 @@ from . import common
 
 NAME, EXTENSION = "G-code", ".nc"
 MACHINES = ("3axis", "5axis-tcp")
+CONTROLLERS = ()  # machine tools: no robot runs G-code
 CHUNK_MOVES = 20_000
 COMMENT_WIDTH = 72
 SAFE_START = "G21 G90 G17 G40 G80 G94"

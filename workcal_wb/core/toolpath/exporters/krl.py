@@ -3,7 +3,9 @@
 ``&ACCESS`` lines, then ``DEF name( )`` on the first statement line (no comment may come before it),
 the declaration ``EXT BAS``, the header as ; comments, initialisation (BAS #INITMOV, tool, base),
 a check that the tool is not still the flange, ``PTP XHOME`` (the controller's own home, also the
-BCO run), a PTP to the first point, LIN moves with $VEL.CP, the CAM file's events (HALT with a
+BCO run), a PTP to the first point (a POS with the Status and Turn of the reach check's solution when a
+robot is given, so that the controller takes that configuration), LIN moves with $VEL.CP, the CAM
+file's events (HALT with a
 comment, WAIT SEC, tool selection), ``PTP XHOME``, ``END``.  Over ``MAX_LINES`` lines the moves go
 into numbered part modules ``name_001.src`` ... that the main module calls in order.
 
@@ -15,12 +17,14 @@ from __future__ import annotations
 
 import re
 
+from ...robots.configuration import kuka_status_turn
 from ..orientation import kuka_abc_deg
 from ..safety import numbers
 from . import common
 
 NAME, EXTENSION = "KUKA KRL", ".src"
 MACHINES = ("robot",)
+CONTROLLERS = ("kuka",)  # the robots whose controller runs this program (robots.model.CONTROLLERS)
 MODES = ("base", "transformed")
 MAX_NAME = 24  # KRL names: at most 24 characters
 MAX_LINES = 2500  # lines per module, as RoboDK's KUKA posts split programs
@@ -70,9 +74,19 @@ def _event_lines(event) -> list[str]:
     return lines
 
 
-def _moves(path):
+def status_turn(job: common.ExportJob) -> tuple[int, int] | None:
+    """Status and Turn of the first target in the reach check's solution (None without one)."""
+    if job.solved is None:
+        return None
+    status, turn = kuka_status_turn(job.options.robot, job.solved.first_joints)
+    return int(status), int(turn)
+
+
+def _moves(path, first_status_turn):
     """The body, one group of lines per target."""
     targets = frames_text(path.rotation, path.position)
+    if first_status_turn is not None:
+        targets[0] = targets[0][:-1] + ", S {}, T {}}}".format(*first_status_turn)
     speed = [None]
 
     def move(i, stops):
@@ -100,9 +114,17 @@ def render(job: common.ExportJob):
     first_tool = common.first_tool(path)
     where = (f"positions: workpiece frame X, relative to $BASE = $ROBROOT:{common.placement_name(job)}" if base_mode
              else "positions: robot base frame B ($BASE = $ROBROOT)")
+    first_status_turn = status_turn(job)
+    if first_status_turn is not None:
+        s, t = first_status_turn
+        configuration = [f"configuration: the PTP to the first point carries Status S {s} ('B{s:03b}') and Turn T {t} "
+                         f"('B{t:06b}') of the reach check's solution, so the robot takes that configuration; the LIN "
+                         "moves keep it"]
+    else:
+        configuration = []
     notes = ["units: mm, $VEL.CP in m/s, $APO.CDIS in mm",
              "angles: A, B, C in degrees, Z-Y'-X'' (A about Z, then B about the new Y, then C about the new X)",
-             where, *common.robot_notes(job, "m/s ($VEL.CP)"),
+             where, *configuration, *common.robot_notes(job, "m/s ($VEL.CP)"),
              f"PLACEHOLDERS to fill on the controller: TOOL_DATA[{'], TOOL_DATA['.join(map(str, tools))}] = the "
              "spindle's TCP with that tool, Z along the tool into the part (the program halts while it is unset); "
              "XHOME = a safe home the robot reaches from anywhere"]
@@ -124,5 +146,5 @@ def render(job: common.ExportJob):
         calls = [f"{common.part_name(name, i)}( )" for i in range(1, count + 1)]
         return _module(name, head, setup + calls + ["PTP XHOME"])
 
-    yield from common.program_files(job, _moves(path), limit, lambda body: _module(
+    yield from common.program_files(job, _moves(path, first_status_turn), limit, lambda body: _module(
         name, head, setup + body + ["PTP XHOME"]), part, main)

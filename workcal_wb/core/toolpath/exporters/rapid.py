@@ -3,18 +3,23 @@
 ``MODULE MOD_name`` with the header as ! comments, the data it uses declared in it (a tooldata per
 CAM tool, the work object whose uframe is W, zone and speeds), and ``PROC name()`` (never ``main``,
 which the controller's own module has): a check that the tool is not still the flange, ConfJ/ConfL
-off, a MoveJ to the first point, MoveL to robtargets in workpiece coordinates, the CAM file's events
+off (on, with every robtarget's confdata from the reach check's solution, when a robot is given), a
+MoveJ to the first point, MoveL to robtargets in workpiece coordinates, the CAM file's events
 (TPWrite and Stop, WaitTime, the next tool).  Over ``MAX_LINES`` lines the moves go into part modules
 ``name_001.mod`` (``PROC name_001``) that ``name`` calls in order.
 """
 from __future__ import annotations
 
+import numpy as np
+
+from ...robots.configuration import abb_confdata
 from ..orientation import quaternion_wxyz
 from ..safety import numbers
 from . import common
 
 NAME, EXTENSION = "ABB RAPID", ".mod"
 MACHINES = ("robot",)
+CONTROLLERS = ("abb",)  # the robots whose controller runs this program (robots.model.CONTROLLERS)
 MAX_NAME = 24  # RAPID identifiers: at most 32 characters, "MOD_" + name + "_001"
 MAX_LINES = 5000  # lines per module, as RoboDK's ABB post splits programs
 MAX_SPEED_MM_S = 7000.0  # speeddata v_tcp limit
@@ -49,14 +54,23 @@ def _string(text: str) -> str:
     return '"' + common.comment_text(text).replace('"', "'").replace("\\", "/")[:MAX_STRING] + '"'
 
 
-def _moves(path, speed_names: dict, first_tool: int):
+def confdata_text(job: common.ExportJob, count: int) -> list[str]:
+    """Every target's confdata [cf1,cf4,cf6,cfx]: from the reach check's solution, else 0,0,0,0 (which
+    ConfJ\\Off and ConfL\\Off let the controller ignore)."""
+    if job.solved is None:
+        return ["[0,0,0,0]"] * count
+    values = abb_confdata(job.options.robot, job.solved.joints)
+    return ["[" + ",".join(map(str, row)) + "]" for row in np.asarray(values).tolist()]
+
+
+def _moves(path, speed_names: dict, first_tool: int, confdata: list):
     """The body, one group of lines per target."""
     targets = poses_text(path.rotation, path.position)
     tools = common.tools_by_move(path, first_tool)
 
     def move(i, stops):
         kind, zone = ("MoveJ", "fine") if i == 0 else ("MoveL", "fine" if stops(i) else ZONE)
-        return [f"    {kind} [{targets[i][1:-1]},[0,0,0,0],{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
+        return [f"    {kind} [{targets[i][1:-1]},{confdata[i]},{_NO_EXTERNAL_AXES}], {speed_names[path.feed[i]]}, "
                 f"{zone}, {tool_name(tools[i])}\\WObj:={WOBJ};"]
 
     return common.move_groups(path, _event_lines, lambda c: f"    ! {c}", move)
@@ -82,14 +96,20 @@ def render(job: common.ExportJob):
     tools = sorted({int(e.number) for e in path.events if e.kind == "tool_change"} | {1})
     first_tool = common.first_tool(path)
     speed_names = {f: f"vWorkCal{i}" for i, f in enumerate(dict.fromkeys(path.feed.tolist()), start=1)}
+    confdata = confdata_text(job, len(path))
+    monitored = job.solved is not None
+    monitoring = "On" if monitored else "Off"  # configuration monitoring of MoveJ and MoveL
+    configuration = ("configuration: ConfJ\\On and ConfL\\On, every robtarget's confdata [cf1,cf4,cf6,cfx] from "
+                     "the reach check's solution (the robot stops rather than reach a target in another configuration)"
+                     if monitored else "configuration: ConfJ\\Off and ConfL\\Off, robtargets carry cf 0,0,0,0 (the "
+                     "robot keeps the configuration it starts in)")
     declared = {WOBJ, ZONE, *speed_names.values(), *map(tool_name, tools)}
     name = common.program_name(job, MAX_NAME, reserved=RESERVED | PREDEFINED | {d.upper() for d in declared})
     notes = ["units: mm, speeds (speeddata v_tcp) in mm/s",
              "angles: orientation quaternions q1..q4 = w, x, y, z (ABB order, unit length)",
              f"positions: workpiece frame X, in work object {WOBJ}: uframe = {common.placement_name(job)}, "
              "oframe identity",
-             "configuration: ConfJ\\Off and ConfL\\Off, robtargets carry cf 0,0,0,0 (the robot keeps the "
-             "configuration it starts in)", *common.robot_notes(job, "mm/s (speeddata)"),
+             configuration, *common.robot_notes(job, "mm/s (speeddata)"),
              f"PLACEHOLDERS to fill: {', '.join(tool_name(t) for t in tools)} = the spindle's TCP and load with "
              "that tool, Z along the tool into the part (the program stops while the TCP is at the flange)"]
     head = [f"  ! {h}" for h in common.wrapped(common.header_lines(job, NAME, notes), COMMENT_WIDTH)]
@@ -103,7 +123,7 @@ def render(job: common.ExportJob):
     t = tool_name(first_tool)
     setup = [f"    IF {t}.tframe.trans.x = 0 AND {t}.tframe.trans.y = 0 AND {t}.tframe.trans.z = 0 THEN",
              f"      TPWrite {_string(f'WorkCal: set {t} to the spindle TCP, then restart')};", "      EXIT;",
-             "    ENDIF", "    ConfJ\\Off;", "    ConfL\\Off;"]
+             "    ENDIF", f"    ConfJ\\{monitoring};", f"    ConfL\\{monitoring};"]
     limit = (job.options.max_lines or MAX_LINES) - 10
 
     def part(index, body):
@@ -114,5 +134,5 @@ def render(job: common.ExportJob):
     def main(count):
         return _module(name, head, data, setup + [f"    {common.part_name(name, i)};" for i in range(1, count + 1)])
 
-    yield from common.program_files(job, _moves(path, speed_names, first_tool), limit,
+    yield from common.program_files(job, _moves(path, speed_names, first_tool, confdata), limit,
                                     lambda body: _module(name, head, data, setup + body), part, main)

@@ -3,7 +3,8 @@
 ``def name():`` in the first column is the first line and ``end`` the last; every line between is
 indented (the header too, as # comments).  The program declares the calibration as a pose
 (``workcal_base = W``) and one TCP per CAM tool (placeholders, checked before moving), moves with
-movej to the first point and then movel to ``pose_trans(workcal_base, target)`` in metres and
+movej to the first point (to the joint values of the reach check's solution when a robot is given, so
+that the robot takes that configuration) and then movel to ``pose_trans(workcal_base, target)`` in metres and
 radians, blending each corner by at most 0.4 of its shorter neighbouring segment, and writes the CAM
 file's events as blocking popups (stops, spindle, coolant, tool change with set_tcp) and sleep
 (dwell).
@@ -18,8 +19,12 @@ from . import common
 
 NAME, EXTENSION = "Universal Robots URScript", ".script"
 MACHINES = ("robot",)
+CONTROLLERS = ("ur",)  # the robots whose controller runs this program (robots.model.CONTROLLERS)
 ACCELERATION_M_S2 = 1.2  # URScript's own default for movel
 JOINT_ACCELERATION, JOINT_SPEED = 1.4, 1.05  # movej defaults, rad/s^2 and rad/s
+# Joint values of movej in radians to this many decimals: 1e-10 rad is 1e-7 mm at the flange of a
+# 1.3 m arm, so the joints reach the pose they were solved for to well under a micrometre.
+JOINT_DECIMALS = 10
 MAX_SPEED_MM_S = 1500.0  # tool speed limit of the default safety configuration
 BLEND_SHARE = 0.4  # a blend radius covers at most this share of the shorter neighbouring segment
 COMMENT_WIDTH = 76
@@ -83,6 +88,9 @@ def render(job: common.ExportJob):
              f"{BLEND_SHARE:g} of a segment; none where the robot stops",
              *common.robot_notes(job, "m/s"),
              "program size: not split (URScript sets no line limit WorkCal knows of)",
+             *(["first move: movej to the joint values (radians) of the reach check's solution at the first target, "
+                "so the robot takes that configuration; they place the TCP set below at the first target"]
+               if job.solved is not None else []),
              f"to run: send the file as it is to the controller's primary/secondary interface (port 30001/30002), "
              f"or in PolyScope insert it with a Script node (File) followed by a Script line {name}()",
              f"PLACEHOLDERS to fill: {', '.join(tcp_name(t) for t in tools)} = the spindle's TCP with that tool "
@@ -96,10 +104,13 @@ def render(job: common.ExportJob):
               f"    popup(\"WorkCal: set {first} to the spindle TCP, then restart\", \"WorkCal\", False, True, "
               "blocking=True)", "    halt", "  end", f"  set_tcp({first})"]
     targets = poses_text(path.rotation, path.position)
+    first_joints = None if job.solved is None else numbers(np.radians(job.solved.first_joints), JOINT_DECIMALS)
     radii = numbers(blend_radii_m(path.position, [i - 1 for i in events if 0 < i <= len(path)] + [len(path) - 1]), 5)
     speeds = numbers(path.feed / 60000.0, 6)
 
     def move(i, stops):
+        if i == 0 and first_joints is not None:
+            return [f"  movej([{', '.join(first_joints)}], a={JOINT_ACCELERATION}, v={JOINT_SPEED})"]
         if i == 0:
             return [f"  movej(pose_trans(workcal_base, {targets[0]}), a={JOINT_ACCELERATION}, v={JOINT_SPEED})"]
         return [f"  movel(pose_trans(workcal_base, {targets[i]}), a={ACCELERATION_M_S2}, v={speeds[i]}, r={radii[i]})"]

@@ -2,7 +2,10 @@
 
 The machine profile is the CLI's ``--machine`` (robot, 3axis, 5axis-tcp) with its ``--vertical-tol``
 and ``--rotary``: a tilted W refused for a 3-axis machine is explained here in words, with its two
-ways out a click away (allow the tilt, or export for a 5-axis machine).
+ways out a click away (allow the tilt, or export for a 5-axis machine).  For a robot program, the
+robot that runs it and its TCP are the CLI's ``--robot`` and ``--tool``: the program is checked
+against the robot and carries the configuration solved (a program the robot cannot follow is
+refused with where to put the part instead, or written FORCED when the user says so).
 """
 from __future__ import annotations
 
@@ -22,6 +25,7 @@ translate = FreeCAD.Qt.translate
 MACHINES = (("robot", translate("WorkCal", "Robot")), ("3axis", translate("WorkCal", "3-axis machine")),
             ("5axis-tcp", translate("WorkCal", "5-axis machine")))
 ROTARY_WORDS = {"ab": "A + B", "ac": "A + C", "bc": "B + C"}
+NO_TOOL = "0, 0, 0, 0, 0, 0"  # the TCP at the flange
 
 
 class ExportStep(Step):
@@ -58,12 +62,25 @@ class ExportStep(Step):
                                                                    "--rotary)"))
         for name in ROTARY:
             self.rotary.addItem(ROTARY_WORDS.get(name, name.upper()), name)
+        self.robot = combo("WorkCal_robot", translate(
+            "WorkCal", "The robot that runs the program: every move is checked against its reach, joint limits and "
+                       "singularities before the program is written, and the program carries the configuration "
+                       "solved (the CLI's --robot); with None the program says its reach was not checked. Only "
+                       "robots whose controller runs the chosen language are listed"))
+        self.tcp = QtWidgets.QLineEdit(NO_TOOL)
+        self.tcp.setObjectName("WorkCal_tcp")
+        self.tcp.setToolTip(translate("WorkCal", "The TCP in the robot's flange frame: X, Y, Z in mm and A, B, C in "
+                                                 "degrees, R = Rz(A) Ry(B) Rx(C) (the CLI's --tool)"))
+        self.robot_title = QtWidgets.QLabel(translate("WorkCal", "Robot"))
+        self.tcp_title = QtWidgets.QLabel(translate("WorkCal", "TCP (X, Y, Z, A, B, C)"))
         self.tilt_title = QtWidgets.QLabel(translate("WorkCal", "Tilt allowed"))
         self.rotary_title = QtWidgets.QLabel(translate("WorkCal", "Rotary axes"))
         form.addRow(translate("WorkCal", "Format"), self.format)
         form.addRow(translate("WorkCal", "Machine"), self.machine)
         form.addRow(self.tilt_title, self.tilt)
         form.addRow(self.rotary_title, self.rotary)
+        form.addRow(self.robot_title, self.robot)
+        form.addRow(self.tcp_title, self.tcp)
         layout.addLayout(form)
         self.path = QtWidgets.QLineEdit()
         self.path.setObjectName("WorkCal_program_file")
@@ -91,6 +108,7 @@ class ExportStep(Step):
         layout.addWidget(self.written)
         self.format.currentIndexChanged.connect(lambda index: self._format_changed())
         self.machine.currentIndexChanged.connect(lambda index: self._machine_changed())
+        self.robot.currentIndexChanged.connect(lambda index: self._robot_changed())
         self._format_changed()
 
     # ------------------------------------------------------------------ widgets
@@ -112,9 +130,37 @@ class ExportStep(Step):
         self.machine.blockSignals(False)
         self.machine.setEnabled(gcode)
         self._machine_changed()
+        self._fill_robots()
         text = self.path.text().strip()
         if text:
             self.path.setText(os.path.splitext(text)[0] + FORMATS[self.fmt()].EXTENSION)
+
+    def _fill_robots(self) -> None:
+        """The robots whose controller runs the chosen format (none for G-code), the choice kept if it still fits."""
+        from workcal_wb.core.robots import builtin_robots, load_robot
+        from workcal_wb.core.toolpath import FORMATS
+
+        kept = self.robot.currentData()
+        controllers = FORMATS[self.fmt()].CONTROLLERS
+        self.robot.blockSignals(True)
+        self.robot.clear()
+        self.robot.addItem(translate("WorkCal", "None"), None)  # the program then says its reach is not checked
+        for robot_id in builtin_robots():
+            robot = load_robot(robot_id)
+            if robot.controller in controllers:
+                self.robot.addItem(robot.name, robot_id)
+        self.robot.setCurrentIndex(max(0, self.robot.findData(kept)) if kept else 0)
+        self.robot.blockSignals(False)
+        for widget in (self.robot, self.robot_title):
+            widget.setVisible(bool(controllers))
+        self._robot_changed()
+
+    def _robot_changed(self) -> None:
+        from workcal_wb.core.toolpath import FORMATS
+
+        chosen = bool(FORMATS[self.fmt()].CONTROLLERS) and self.robot.currentData() is not None
+        for widget in (self.tcp, self.tcp_title):
+            widget.setVisible(chosen)
 
     def _machine_changed(self) -> None:
         for widget in (self.tilt, self.tilt_title):
@@ -123,10 +169,16 @@ class ExportStep(Step):
             widget.setVisible(self.machine_profile() == "5axis-tcp")
         self.refusal.setVisible(False)
 
-    def set_options(self, fmt=None, machine=None, vertical_tol_deg=None, rotary=None, path=None) -> None:
-        """Set the page's choices as a user would (tests and scripts)."""
+    def set_options(self, fmt=None, machine=None, vertical_tol_deg=None, rotary=None, path=None, robot=None,
+                    tool=None) -> None:
+        """Set the page's choices as a user would (tests and scripts); ``robot`` a built-in id ("" for none),
+        ``tool`` the TCP as the field takes it, "X, Y, Z, A, B, C"."""
         if fmt is not None:
             self.format.setCurrentIndex(self.format.findData(fmt))
+        if robot is not None:
+            self.robot.setCurrentIndex(max(0, self.robot.findData(robot)) if robot else 0)
+        if tool is not None:
+            self.tcp.setText(tool)
         if machine is not None:
             self.machine.setCurrentIndex(self.machine.findData(machine))
         if vertical_tol_deg is not None:
@@ -143,7 +195,24 @@ class ExportStep(Step):
             out["vertical_tol_deg"] = self.tilt.value()
         if machine == "5axis-tcp":
             out["rotary"] = self.rotary.currentData()
+        if machine == "robot" and self.robot.currentData() is not None:
+            out["robot"] = self.robot.currentData()
+            out["tool"] = self.tool()
         return out
+
+    def tool(self) -> list:
+        """The TCP field as six numbers (InputError naming the field when it is not)."""
+        from workcal_wb.core.errors import InputError
+
+        text = self.tcp.text().strip() or NO_TOOL
+        try:
+            values = [float(v) for v in text.split(",")]
+        except ValueError:
+            values = []
+        if len(values) != 6 or not all(map(math.isfinite, values)):
+            raise InputError(translate("WorkCal", "TCP {!r}: expected six numbers X, Y, Z, A, B, C (mm and degrees, "
+                                                  "the TCP in the robot's flange frame)").format(text))
+        return values
 
     def default_path(self) -> str:
         from workcal_wb.core.toolpath import FORMATS
@@ -180,8 +249,9 @@ class ExportStep(Step):
 
     # ------------------------------------------------------------------ export
     def export(self, confirm=None):
-        """Write the program (recorded); forcing is asked for a calibration that is not ok; a tool tilted
-        past what a 3-axis machine allows is explained on the page with its two ways out."""
+        """Write the program (recorded); forcing is asked for a calibration that is not ok and for a program
+        the chosen robot cannot follow (the question says why and where to put the part instead); a tool
+        tilted past what a 3-axis machine allows is explained on the page with its two ways out."""
         from workcal_wb.core.toolpath import ToolTilted
         from workcal_wb.core.toolpath.safety import PathOffModel
         from workcal_wb.gui.commands.toolpath import export_program

@@ -1,0 +1,532 @@
+"""Can this robot follow this program?  Every pose a program commands, solved on the robot's kinematics.
+
+A program's poses are the TCP in the controller's base frame (the robot base frame B of W = ^B X), one
+per robot target, each reached by a joint move (PTP, MoveJ, J, movej: the controller may choose any
+configuration there) or a linear move (LIN, MoveL, L, movel: the controller interpolates the pose and
+cannot change configuration, nor unwind a joint by a whole turn, on the way).  ``check_reach``:
+
+* solves the flange (TCP times the inverse of the tool) of every target and of points along every
+  linear move, at most ``SAMPLE_STEP_MM`` and ``SAMPLE_STEP_DEG`` apart (position interpolated
+  linearly, orientation along the shortest rotation, as the controllers do);
+* follows each of the eight configurations (``kinematics.inverse``'s branches) from joint move to
+  joint move, its joints unwrapped into one continuous turn each and then moved by whole turns to
+  leave the most room to the limits; a stretch of linear moves is reachable in a configuration when
+  every point of it is reachable, within the joint limits and without a joint turning more than
+  ``MAX_JOINT_STEP_DEG`` per sample step (a flip through a singularity);
+* keeps the configuration of the previous stretch where it can, else takes the one with the most
+  room to the joint limits; the first stretch no configuration follows is the program's problem:
+  out of reach, a joint limit, a configuration change inside a linear move, or a wrist, elbow or
+  shoulder singularity, with the first robot target (and source line) where it happens;
+* reports the smallest joint-limit margin and how close the path comes to each singularity, with
+  the joints (and configuration) at every target for the exporters.
+
+Everything is vectorised over poses; Python loops run over the eight configurations and over the
+stretches between joint moves only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .. import frames
+from .kinematics import inverse, wrap_into_limits
+from .model import Robot
+from .opw import model_angles
+
+# The move kinds ``check_reach`` takes: at a joint move the controller may change configuration.
+JOINT_MOVE, LINEAR_MOVE = 0, 1
+
+# A linear move is checked at points this far apart along it (mm) and in tool rotation (deg): over
+# such a step no joint of an arm away from its singularities turns more than a few degrees.
+SAMPLE_STEP_MM = 5.0
+SAMPLE_STEP_DEG = 2.0
+# Most any joint may turn over one full sample step; past a singularity joints 4 and 6 (or 1, or 2
+# and 3) turn up to 180 deg at once.  Shorter steps allow proportionally less: a fine raster passing
+# close to a singularity is as fast for the joints as a coarse one passing through it.
+MAX_JOINT_STEP_DEG = 20.0
+# What a step shorter than this share of a sample step is still allowed (so that repeated points and
+# rounding never count as a flip): MAX_JOINT_STEP_DEG times it, 0.2 deg.
+MIN_STEP_SHARE = 0.01
+# Closer than these the header warns: axes 4 and 6 nearly in line (wrist), the arm nearly stretched
+# or folded (elbow), the wrist point nearly on axis 1 (shoulder): there small moves of the tool
+# need large, fast joint moves, and controllers slow down or stop.
+WRIST_NEAR_DEG = 5.0
+ELBOW_NEAR_DEG = 5.0
+SHOULDER_NEAR_MM = 50.0
+# The arm posture (OPW branch modulo 4) taken where it follows the program: the wrist centre in front of
+# axis 1 and the elbow up, as robots are homed and set up, so the first joint move does not swing the
+# arm over its base or under its elbow.
+USUAL_ARM = 0
+# Poses solved at a time: the inverse kinematics' temporaries (a few MB each) then stay under glibc's
+# mmap threshold and are reused, rather than mapped and faulted in afresh for every chunk.
+SOLVE_CHUNK = 1 << 13
+# Whole turns tried when a joint is moved into its limits: no robot joint spans more than +-540 deg.
+TURN_SHIFTS_DEG = 360.0 * np.arange(-2, 3)
+
+# What ``ReachReport.problem`` says (None: the robot follows the program).
+OUT_OF_REACH = "out_of_reach"
+JOINT_LIMIT = "joint_limit"
+CONFIGURATION_CHANGE = "configuration_change"
+WRIST_SINGULARITY = "wrist_singularity"
+ELBOW_SINGULARITY = "elbow_singularity"
+SHOULDER_SINGULARITY = "shoulder_singularity"
+PROBLEMS = (OUT_OF_REACH, JOINT_LIMIT, CONFIGURATION_CHANGE, WRIST_SINGULARITY, ELBOW_SINGULARITY,
+            SHOULDER_SINGULARITY)
+# The singularity a joint that jumps belongs to (0-based joints 0..5).
+_JUMP_SINGULARITY = (SHOULDER_SINGULARITY, ELBOW_SINGULARITY, ELBOW_SINGULARITY, WRIST_SINGULARITY,
+                     WRIST_SINGULARITY, WRIST_SINGULARITY)
+# How each controller names its joints.
+JOINT_NAMES = {"kuka": tuple(f"A{i}" for i in range(1, 7)), "abb": tuple(f"axis {i}" for i in range(1, 7)),
+               "fanuc": tuple(f"J{i}" for i in range(1, 7)),
+               "ur": ("base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3")}
+
+
+@dataclass(frozen=True)
+class Where:
+    """A place along the program: robot target ``target`` (0-based), its source line (0: unknown), and
+    whether it lies on the linear move to that target rather than at it."""
+
+    target: int
+    line: int = 0
+    on_the_way: bool = False
+
+    def text(self) -> str:
+        """'robot target 5 (line 12)', or 'the linear move to robot target 5 (line 12)'."""
+        what = f"robot target {self.target + 1}" + (f" (line {self.line})" if self.line else "")
+        return f"the linear move to {what}" if self.on_the_way else what
+
+    def on(self) -> str:
+        """'at robot target 5 (line 12)', or 'on the linear move to robot target 5 (line 12)'."""
+        return ("on " if self.on_the_way else "at ") + self.text()
+
+
+@dataclass(frozen=True)
+class Extreme:
+    """The smallest value of a measure along the program, where it is, and (margins) which joint (0-based)."""
+
+    value: float
+    where: Where
+    joint: int | None = None
+
+
+@dataclass(frozen=True)
+class ReachReport:
+    """What ``check_reach`` found.  ``problem`` is None when the robot follows the whole program, else
+    one of PROBLEMS, with ``reason`` in words and ``problem_at`` the first robot target it concerns.
+    Measures cover the program up to the problem: ``margin`` (deg, the joint nearest its limit),
+    ``wrist`` (deg, joint 5 from 0 or 180), ``elbow`` (deg, the arm from stretched or folded),
+    ``shoulder`` (mm, the wrist point from axis 1); ``near`` lists the singularities the path comes
+    closer to than WRIST_NEAR_DEG, ELBOW_NEAR_DEG, SHOULDER_NEAR_MM.  ``joints`` (N, 6) and
+    ``branches`` (N,) are the solution at every target (NaN and -1 past a problem)."""
+
+    robot_id: str
+    targets: int
+    samples: int
+    problem: str | None
+    reason: str
+    problem_at: Where | None
+    problem_joint: int | None
+    unreachable_at: Where | None
+    margin: Extreme | None
+    wrist: Extreme | None
+    elbow: Extreme | None
+    shoulder: Extreme | None
+    near: tuple = ()
+    configuration_changes: tuple = ()
+    first_branch: int | None = None
+    first_joints: tuple | None = None
+    joints: np.ndarray = field(default=None, compare=False, repr=False)
+    branches: np.ndarray = field(default=None, compare=False, repr=False)
+
+    @property
+    def reachable(self) -> bool:
+        return self.problem is None
+
+
+def joint_name(robot: Robot, joint: int) -> str:
+    """The controller's name of joint ``joint`` (0-based): A1, axis 1, J1, base."""
+    return JOINT_NAMES.get(robot.controller, JOINT_NAMES["fanuc"])[joint]
+
+
+def check_reach(robot: Robot, tcp_poses, tool=None, move_kinds=None, source_lines=None) -> ReachReport:
+    """Whether ``robot`` follows a program: ``tcp_poses`` (N, 4, 4) the TCP at every robot target in the
+    controller's base frame (mm), ``tool`` the TCP in the flange frame (4x4, default the flange),
+    ``move_kinds`` (N,) JOINT_MOVE or LINEAR_MOVE (default: a joint move to the first target, linear
+    moves after it; the first move is always a joint move, its start being unknown), ``source_lines``
+    (N,) the source line of each target, for messages (0: unknown)."""
+    poses = np.asarray(tcp_poses, dtype=float)
+    if poses.ndim != 3 or poses.shape[1:] != (4, 4) or not len(poses):
+        raise ValueError(f"tcp_poses must have shape (N, 4, 4) with N >= 1, got {poses.shape}")
+    count = len(poses)
+    tool = np.eye(4) if tool is None else np.asarray(tool, dtype=float)
+    kinds = np.full(count, LINEAR_MOVE, dtype=np.int8) if move_kinds is None else np.array(move_kinds, dtype=np.int8)
+    kinds[0] = JOINT_MOVE
+    lines = np.zeros(count, dtype=np.int64) if source_lines is None else np.asarray(source_lines, dtype=np.int64)
+    if kinds.shape != (count,) or lines.shape != (count,):
+        raise ValueError(f"move_kinds and source_lines must have one entry per pose ({count})")
+    path = _Samples(poses @ frames.invert(tool), kinds, lines)
+    followed = _solved(robot, path.poses)
+    follower = _Follower(robot, path)
+    results = [follower.follow(followed, b) for b in range(len(followed))]
+    choice = _choose(robot, results, path)
+    return _report(robot, path, followed.transpose(2, 0, 1), results, choice)
+
+
+def _solved(robot: Robot, poses: np.ndarray) -> np.ndarray:
+    """(8, 6, M) the joints of every configuration at every pose: one row per joint, so that what is
+    done per configuration runs over contiguous rows (solved in chunks, to hold one copy)."""
+    out = np.empty((8, 6, len(poses)))
+    for start in range(0, len(poses), SOLVE_CHUNK):
+        out[:, :, start:start + SOLVE_CHUNK] = inverse(robot, poses[start:start + SOLVE_CHUNK]).transpose(1, 2, 0)
+    return out
+
+
+class _Samples:
+    """The flange poses the check solves: every target, and points along each linear move to it."""
+
+    def __init__(self, flange: np.ndarray, kinds: np.ndarray, lines: np.ndarray):
+        count = len(flange)
+        position, rotation = flange[:, :3, 3], flange[:, :3, :3]
+        length, turn = np.zeros(count), np.zeros(count)
+        length[1:] = np.linalg.norm(np.diff(position, axis=0), axis=1)
+        cosine = (np.einsum("nij,nij->n", rotation[:-1], rotation[1:]) - 1.0) / 2.0
+        turn[1:] = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+        linear = kinds == LINEAR_MOVE
+        extent = np.where(linear, np.maximum(length / SAMPLE_STEP_MM, turn / SAMPLE_STEP_DEG), 0.0)
+        pieces = np.maximum(1, np.ceil(extent - 1e-9)).astype(np.int64)
+        owner = np.repeat(np.arange(count), pieces)
+        first = np.cumsum(pieces) - pieces
+        k = np.arange(len(owner)) - first[owner] + 1
+        self.at_target = k == pieces[owner]
+        self.poses = flange[owner]
+        inner = np.flatnonzero(~self.at_target)
+        if inner.size:
+            target = owner[inner]
+            share = (k[inner] / pieces[target])[:, None]
+            self.poses[inner, :3, 3] = position[target - 1] + share * (position[target] - position[target - 1])
+            split = np.flatnonzero(pieces > 1)
+            relative = Rotation.from_matrix(np.swapaxes(rotation[split - 1], 1, 2) @ rotation[split]).as_rotvec()
+            turned = Rotation.from_rotvec(relative[np.searchsorted(split, target)] * share).as_matrix()
+            self.poses[inner, :3, :3] = rotation[target - 1] @ turned
+        # How far each sample lies from the one before: mm, deg, and in sample steps (inf after a joint
+        # move: not checked).
+        self.length = (length / pieces)[owner]
+        self.turn = (turn / pieces)[owner]
+        self.step = np.where(linear, extent / pieces, np.inf)[owner]
+        self.owner, self.kinds, self.lines = owner, kinds, lines
+        starts = self.at_target & (kinds[owner] == JOINT_MOVE)
+        self.starts = np.flatnonzero(starts)  # samples where a stretch between joint moves begins
+        self.run = np.cumsum(starts) - 1  # the stretch of every sample
+        self.ends = np.append(self.starts[1:], len(owner))
+        self.lengths = self.ends - self.starts
+
+    def __len__(self) -> int:
+        return len(self.owner)
+
+    def where(self, sample: int) -> Where:
+        target = int(self.owner[sample])
+        return Where(target, int(self.lines[target]), not bool(self.at_target[sample]))
+
+
+@dataclass
+class _Branch:
+    """One configuration followed along the program, per stretch: the first sample where it fails
+    (``len(samples)`` when it does not), how (``_MISSING``, ``_JUMP``, ``_LIMIT``) and its room to the
+    limits before that; per sample whether a joint jumps there."""
+
+    fail: np.ndarray
+    how: np.ndarray
+    room: np.ndarray
+    jump: np.ndarray
+
+
+_MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
+
+
+class _Follower:
+    def __init__(self, robot: Robot, path: _Samples):
+        self.low, self.high = robot.limits[:, 0], robot.limits[:, 1]
+        self.path = path
+        self.allowed = MAX_JOINT_STEP_DEG * np.maximum(path.step, MIN_STEP_SHARE)
+
+    def follow(self, followed: np.ndarray, branch: int) -> _Branch:
+        """Follow ``branch`` along the program; its rows of ``followed`` (6, M) become the continuous
+        joints, each stretch moved by the whole turns that leave the most room to the limits."""
+        path, count = self.path, len(self.path)
+        q = followed[branch]
+        missing = np.isnan(q[0])
+        step = np.diff(q, axis=1)
+        unwind = np.round(step / 360.0)
+        unwind *= 360.0
+        unwind[:, path.starts[1:] - 1] = 0.0  # no continuity into a joint move
+        unwind = np.nan_to_num(unwind, copy=False)
+        turns = np.zeros_like(q)
+        np.cumsum(unwind, axis=1, out=turns[:, 1:])
+        if len(path.starts) > 1:
+            turns -= np.repeat(turns[:, path.starts], path.lengths, axis=1)
+        q -= turns
+        step -= unwind
+        np.abs(step, out=step)
+        jump = np.zeros(count, dtype=bool)
+        with np.errstate(invalid="ignore"):
+            jump[1:] = step.max(axis=0) > self.allowed[1:]
+        del step, unwind, turns
+        index = np.arange(count)
+        bad = missing | jump
+        first_bad = np.minimum.reduceat(np.where(bad, index, count), path.starts)
+        valid = index < np.repeat(first_bad, path.lengths)
+        masked = q if valid.all() else np.where(valid, q, np.nan)
+        with np.errstate(invalid="ignore"):
+            low = np.fmin.reduceat(masked, path.starts, axis=1)
+            high = np.fmax.reduceat(masked, path.starts, axis=1)
+            room = np.minimum(low[..., None] + TURN_SHIFTS_DEG - self.low[:, None, None],
+                              self.high[:, None, None] - high[..., None] - TURN_SHIFTS_DEG)
+        room = np.nan_to_num(room, nan=-np.inf)
+        best = np.argmax(room, axis=-1)  # (6, runs)
+        most = np.take_along_axis(room, best[..., None], axis=-1)[..., 0]
+        cramped = np.flatnonzero((np.isfinite(most) & (most < 0)).any(axis=1))
+        for joint in cramped:  # a joint no whole turn fits: the turn that keeps it inside its limits longest
+            best[joint] = self._longest_inside(masked[joint], joint, room[joint])
+        shift = TURN_SHIFTS_DEG[best]
+        q += np.repeat(shift, path.lengths, axis=1) if len(path.starts) > 1 else shift
+        with np.errstate(invalid="ignore"):
+            margin = np.minimum(q - self.low[:, None], self.high[:, None] - q).min(axis=0)
+            outside = valid & (margin < 0)
+        first_outside = np.minimum.reduceat(np.where(outside, index, count), path.starts)
+        fail = np.minimum(first_bad, first_outside)
+        failed = fail < path.ends
+        at = np.minimum(fail, count - 1)
+        how = np.where(~failed, _NONE, np.where(missing[at], _MISSING, np.where(jump[at], _JUMP, _LIMIT)))
+        with np.errstate(invalid="ignore"):
+            run_room = np.fmin.reduceat(np.where(index < np.repeat(fail, path.lengths), margin, np.nan),
+                                        path.starts)
+        return _Branch(fail, how, run_room, jump)
+
+    def _longest_inside(self, values: np.ndarray, joint: int, room: np.ndarray) -> np.ndarray:
+        """(runs,) index into TURN_SHIFTS_DEG: per stretch, the whole turn after which ``values`` (M,) of
+        ``joint`` first leave its limits latest (then the one with the most room)."""
+        path, count = self.path, len(self.path)
+        index = np.arange(count)
+        latest = np.empty((len(path.starts), len(TURN_SHIFTS_DEG)))
+        for k, shift in enumerate(TURN_SHIFTS_DEG):  # a handful of turns, each over every sample at once
+            with np.errstate(invalid="ignore"):
+                out = (values + shift < self.low[joint]) | (values + shift > self.high[joint])
+            latest[:, k] = np.minimum.reduceat(np.where(out, index, count), path.starts)
+        return np.lexsort((room, latest), axis=-1)[:, -1]
+
+
+@dataclass
+class _Choice:
+    branch_of_run: np.ndarray  # -1 for stretches after the problem
+    stop: int  # the first sample past what the chosen configurations follow (len(samples): all)
+    failed_run: int | None
+    best: int | None  # the configuration that goes furthest in the failed stretch
+
+
+def _choose(robot: Robot, results: list, path: _Samples) -> _Choice:
+    """One configuration per stretch: the previous one where it follows the stretch, else (OPW arms)
+    the usual posture where it does (``USUAL_ARM``), else the one with the most room to the limits;
+    the first stretch none follows stops the choice."""
+    fail = np.stack([r.fail for r in results])  # (8, runs)
+    room = np.nan_to_num(np.stack([r.room for r in results]), nan=-np.inf)
+    follows = fail >= path.ends
+    usual = (np.arange(len(results)) % 4 == USUAL_ARM) if robot.opw is not None else np.ones(len(results), bool)
+    chosen = np.full(len(path.starts), -1, dtype=np.int64)
+    previous = None
+    for run in range(len(path.starts)):  # one pass over the stretches between joint moves
+        if previous is not None and follows[previous, run]:
+            chosen[run] = previous
+        elif follows[:, run].any():
+            pick = follows[:, run] & usual if (follows[:, run] & usual).any() else follows[:, run]
+            chosen[run] = int(np.argmax(np.where(pick, room[:, run], -np.inf)))
+        else:
+            order = np.lexsort((room[:, run], fail[:, run]))  # furthest, then most room
+            best = int(order[-1])
+            chosen[run] = best  # followed up to where it fails
+            return _Choice(chosen, int(fail[best, run]), run, best)
+        previous = chosen[run]
+    return _Choice(chosen, len(path), None, None)
+
+
+def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice) -> ReachReport:
+    stop = choice.stop
+    samples = np.arange(stop)
+    branch = choice.branch_of_run[path.run[:stop]]
+    joints = solutions[samples, branch]
+    reached = np.zeros(len(path), dtype=bool)
+    reached[:stop] = True
+    target_rows = np.flatnonzero(path.at_target & reached)
+    count = len(path.kinds)
+    target_joints = np.full((count, 6), np.nan)
+    target_branch = np.full(count, -1, dtype=np.int8)
+    target_joints[path.owner[target_rows]] = solutions[target_rows, branch[target_rows]]
+    target_branch[path.owner[target_rows]] = branch[target_rows]
+
+    margin = wrist = elbow = shoulder = None
+    near = []
+    if stop:
+        per_joint = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
+        at = int(np.argmin(per_joint.min(axis=1)))
+        margin = Extreme(float(per_joint[at].min()), path.where(at), int(np.argmin(per_joint[at])))
+        wrist_deg, elbow_deg = singular_angles(robot, joints)
+        shoulder_mm = shoulder_distance(robot, path.poses[:stop])
+        for values, threshold, name in ((wrist_deg, WRIST_NEAR_DEG, WRIST_SINGULARITY),
+                                        (elbow_deg, ELBOW_NEAR_DEG, ELBOW_SINGULARITY),
+                                        (shoulder_mm, SHOULDER_NEAR_MM, SHOULDER_SINGULARITY)):
+            at = int(np.argmin(values))
+            extreme = Extreme(float(values[at]), path.where(at))
+            if extreme.value < threshold:
+                near.append(name)
+            if name == WRIST_SINGULARITY:
+                wrist = extreme
+            elif name == ELBOW_SINGULARITY:
+                elbow = extreme
+            else:
+                shoulder = extreme
+    runs = choice.branch_of_run
+    changes = tuple(int(path.owner[path.starts[r]]) for r in range(1, len(runs))
+                    if runs[r] >= 0 and runs[r - 1] >= 0 and runs[r] != runs[r - 1])
+    problem, reason, problem_at, problem_joint = None, "", None, None
+    if choice.failed_run is not None:
+        problem, reason, problem_joint = _problem(robot, path, solutions, results, choice)
+        problem_at = path.where(stop)
+    unreachable = np.flatnonzero(path.at_target & np.isnan(solutions[:, :, 0]).all(axis=1))
+    first_joints = tuple(float(v) for v in target_joints[0]) if target_branch[0] >= 0 else None
+    return ReachReport(robot.id, count, len(path), problem, reason, problem_at, problem_joint,
+                       path.where(int(unreachable[0])) if unreachable.size else None, margin, wrist, elbow, shoulder,
+                       tuple(near), changes, int(target_branch[0]) if first_joints else None, first_joints,
+                       target_joints, target_branch)
+
+
+def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice):
+    """(code, reason, joint) for the stretch no configuration follows, at the sample where the
+    configuration that goes furthest fails."""
+    at, best = choice.stop, choice.best
+    where, on = path.where(at).text(), path.where(at).on()
+    here = solutions[at]  # (8, 6), this sample's joints in every configuration as followed
+    reaches = ~np.isnan(here[:, 0])
+    if not reaches.any():
+        flange = path.poses[at]
+        x, y, z = flange[:3, 3]
+        return OUT_OF_REACH, (f"{where} is out of the robot's reach: no configuration puts the flange at "
+                              f"({x:.1f}, {y:.1f}, {z:.1f}) mm in the robot base frame, "
+                              f"{np.linalg.norm(flange[:3, 3]):.0f} mm from its origin"), None
+    how = results[best].how[choice.failed_run]
+    start = path.where(int(path.starts[choice.failed_run])).text()
+    if how == _JUMP:
+        turned = np.abs(here[best] - solutions[at - 1, best])
+        joint = int(np.argmax(turned))
+        code = _JUMP_SINGULARITY[joint]
+        words = {WRIST_SINGULARITY: "the wrist passes its singularity (axes 4 and 6 in line)",
+                 ELBOW_SINGULARITY: "the arm passes its stretched or folded position (elbow singularity)",
+                 SHOULDER_SINGULARITY: "the wrist point passes over axis 1 (shoulder singularity)"}[code]
+        wrist = [j for j in (3, 5) if turned[j] > MAX_JOINT_STEP_DEG] if code == WRIST_SINGULARITY else []
+        names = " and ".join(joint_name(robot, j) for j in (wrist or [joint]))
+        flip = code == WRIST_SINGULARITY and turned[joint] >= 90.0
+        return code, (f"{on}, {words}: {names} would turn {turned[joint]:.0f} deg while the flange moves "
+                      f"{path.length[at]:.2g} mm and turns {path.turn[at]:.2g} deg"
+                      + (" (a wrist flip)" if flip else "")), joint
+    in_limits = ~np.isnan(wrap_into_limits(robot, here)[:, 0])
+    if how == _MISSING:
+        others = np.flatnonzero(reaches)
+        if in_limits.any():
+            return CONFIGURATION_CHANGE, (
+                f"{where} is out of reach in the configuration the robot takes at {start} "
+                f"({configuration_words(robot, best, solutions[path.starts[choice.failed_run], best])}); "
+                f"another configuration ({_words_at(robot, here, in_limits)}) reaches it, but a robot cannot "
+                "change configuration inside a linear move"), None
+        joint, value, limit = _worst_joint(robot, here[others])
+        return JOINT_LIMIT, (f"{where} needs {joint_name(robot, joint)} at {value:.1f} deg, past its limit "
+                             f"{limit:g} deg, in every configuration that reaches it"), joint
+    joints = here[best]
+    margin = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
+    joint = int(np.argmin(margin))
+    limit = robot.limits[joint, 0] if joints[joint] < robot.limits[joint, 0] else robot.limits[joint, 1]
+    passing = f"{joint_name(robot, joint)} would pass its limit {limit:g} deg (to {joints[joint]:.1f} deg)"
+    if in_limits[best]:
+        return JOINT_LIMIT, (f"{on}, {passing}: the robot reaches that pose only with "
+                             f"{joint_name(robot, joint)} a whole turn away, and it cannot unwind a turn inside a "
+                             "linear move"), joint
+    if in_limits.any():
+        return CONFIGURATION_CHANGE, (
+            f"{on}, {passing} in the configuration the robot takes at {start} "
+            f"({configuration_words(robot, best, solutions[path.starts[choice.failed_run], best])}); another "
+            f"configuration ({_words_at(robot, here, in_limits)}) reaches it, but a robot cannot change "
+            "configuration inside a linear move"), joint
+    return JOINT_LIMIT, f"{on}, {passing}, and no other configuration reaches it within the limits", joint
+
+
+def _worst_joint(robot: Robot, joints: np.ndarray) -> tuple[int, float, float]:
+    """Of (K, 6) joints, each joint at its best whole turn: the joint furthest past its limit in the row
+    that is least so, as (joint, value, limit)."""
+    low, high = robot.limits[:, 0], robot.limits[:, 1]
+    turned = joints[..., None] + TURN_SHIFTS_DEG  # (K, 6, turns)
+    room = np.minimum(turned - low[:, None], high[:, None] - turned)
+    best = np.argmax(room, axis=-1)
+    value = np.take_along_axis(turned, best[..., None], axis=-1)[..., 0]
+    margin = np.take_along_axis(room, best[..., None], axis=-1)[..., 0]
+    row = int(np.argmax(margin.min(axis=1)))
+    joint = int(np.argmin(margin[row]))
+    limit = float(low[joint] if value[row, joint] < low[joint] else high[joint])
+    return joint, float(value[row, joint]), limit
+
+
+def _words_at(robot: Robot, here: np.ndarray, in_limits: np.ndarray) -> str:
+    branch = int(np.flatnonzero(in_limits)[0])
+    return configuration_words(robot, branch, wrap_into_limits(robot, here[branch]))
+
+
+def configuration_words(robot: Robot, branch: int, joints) -> str:
+    """A configuration as the controller names it: KUKA Status, ABB cfx, Fanuc 'N U T', UR signs."""
+    from .configuration import abb_confdata, fanuc_config, kuka_status_turn
+
+    joints = np.asarray(joints, dtype=float)
+    if robot.controller == "kuka":
+        status = int(kuka_status_turn(robot, joints)[0])
+        return f"Status {status} ('B{status:03b}')"
+    if robot.controller == "abb":
+        return f"cfx {int(abb_confdata(robot, joints)[3])}"
+    if robot.controller == "fanuc":
+        return f"'{str(fanuc_config(robot, joints)).split(',')[0]}'"
+    shoulder = "first" if branch % 4 < 2 else "second"
+    return (f"{shoulder} shoulder solution, elbow {'positive' if joints[2] >= 0 else 'negative'}, "
+            f"wrist 2 {'positive' if joints[4] >= 0 else 'negative'}")
+
+
+def _from_singular(angle_deg) -> np.ndarray:
+    """Degrees from the nearest multiple of 180 (0 or 180: where the axes line up)."""
+    rest = np.remainder(angle_deg, 180.0)
+    return np.minimum(rest, 180.0 - rest)
+
+
+def singular_angles(robot: Robot, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+    """(wrist, elbow) in degrees from their singularities for (..., 6) controller joints: joint 5 from 0
+    or 180 (axes 4 and 6 in line), the elbow from the arm stretched or folded."""
+    joints = np.asarray(joints_deg, dtype=float)
+    if robot.opw is not None:
+        theta = np.degrees(model_angles(robot.opw, joints))
+        elbow = theta[..., 2] + np.degrees(np.arctan2(robot.opw.a2, robot.opw.c3))
+        return _from_singular(theta[..., 4]), _from_singular(elbow)
+    return _from_singular(joints[..., 4]), _from_singular(joints[..., 2])
+
+
+def wrist_points(robot: Robot, flange_poses) -> np.ndarray:
+    """(..., 3) the wrist point of (..., 4, 4) flange poses (controller frames), in the model's base frame:
+    the OPW wrist centre, or the UR joint-5 origin (where axes 5 and 6 cross)."""
+    model = np.asarray(flange_poses, dtype=float)
+    if not np.array_equal(robot.base_transform, np.eye(4)):
+        model = robot.base_transform @ model
+    if not np.array_equal(robot.flange_transform, np.eye(4)):
+        model = model @ frames.invert(robot.flange_transform)
+    offset = robot.opw.c4 if robot.opw is not None else robot.ur.d6
+    return model[..., :3, 3] - offset * model[..., :3, 2]
+
+
+def shoulder_distance(robot: Robot, flange_poses) -> np.ndarray:
+    """(...) mm from the shoulder singularity: the wrist point's distance from axis 1 in the arm's plane
+    (beside the OPW offset b; beside UR's shoulder offset d4)."""
+    point = wrist_points(robot, flange_poses)
+    side = robot.opw.b if robot.opw is not None else robot.ur.d4
+    return np.sqrt(np.maximum(point[..., 0] ** 2 + point[..., 1] ** 2 - side ** 2, 0.0))
