@@ -55,7 +55,7 @@ fuzz: setup
 # dependency), one folder per Python (the chroot's other Debian has another); without network it skips.
 PYTAG         := $(shell $(PYTHON) -c 'import sys; print(f"py{sys.version_info[0]}{sys.version_info[1]}")')
 test-peers: setup
-	@[ -d $(BUILD)/test-peers/$(PYTAG)/py_opw_kinematics ] || $(PYTHON) -m pip install --quiet --no-deps \
+	@[ -d $(BUILD)/test-peers/$(PYTAG)/py_opw_kinematics ] || $(PYTHON) -m pip install --quiet --root-user-action=ignore --no-deps \
 	    --target $(BUILD)/test-peers/$(PYTAG) py-opw-kinematics || echo "WorkCal: py-opw-kinematics not installed: its cross-checks skip"
 
 # The whole-process table's second peer, from PyPI into build/peers (the benchmark's only; never a runtime
