@@ -285,3 +285,68 @@ def test_the_last_painted_by_sort_agrees_with_painting_in_turn():
     assert np.array_equal(sorted_last_painted(pixel, order, 60), expected)
     assert np.array_equal(last_painted(pixel, order, 60), expected)
     assert np.array_equal(sorted_last_painted(pixel[:0], order[:0], 60), np.full(60, -1))
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    """An (height, width, 3) image from the PNG bytes picture.png writes (8-bit RGB, every row unfiltered)."""
+    import struct
+    import zlib
+
+    width, height = struct.unpack(">II", png[16:24])
+    data, at = b"", 8
+    while at < len(png):
+        length, kind = struct.unpack(">I4s", png[at:at + 8])
+        if kind == b"IDAT":
+            data += png[at + 8:at + 8 + length]
+        at += 12 + length
+    rows = np.frombuffer(zlib.decompress(data), np.uint8).reshape(height, 1 + 3 * width)
+    assert not rows[:, 0].any(), "a filtered row"
+    return rows[:, 1:].reshape(height, width, 3)
+
+
+def _figures(page: str, alt_start: str) -> list:
+    return [_pixels(base64.b64decode(src)) for src in
+            re.findall(rf'<img alt="{re.escape(alt_start)}[^"]*" src="data:image/png;base64,([^"]+)"', page)]
+
+
+def test_the_report_says_and_draws_the_points_a_region_s_model_leaves_unexplained(tmp_path):
+    """A reference box drawn loosely around the block and a band of the platform beside it: the regions
+    section says how many of its points lie off the block's placed model, where and what to change; the
+    views of both regions draw those points in the off-model colour (the deviation views of the clean
+    workpiece have none), with a legend line."""
+    import html
+
+    from loose_regions import platform_band_beside_the_block
+    from workcal_wb.core.picture import to_bytes
+    from workcal_wb.core.report import OFF_MODEL_COLOUR
+
+    scene = platform_band_beside_the_block()
+    result = calibrate(scene.cloud, scene.workpiece_model, scene.reference_model, regions=scene.regions,
+                       options=CalibrationOptions(resamples=2))
+    note = result.off_model("reference")
+    assert result.status == FAILED and note["count"] > 1000
+    region = result.regions["workpiece"]
+    page = write_report(result, tmp_path, workpiece_points=scene.cloud.points[region],
+                        workpiece_model=scene.workpiece_model,
+                        scan_points=scene.cloud.points)["html"].read_text(encoding="utf-8")
+    said = f"The reference region: {note['count']} points off its placed model, {note['where']}. {note['change']}."
+    assert html.escape(said) in page
+    assert "The workpiece region: every point lies on its placed model." in page
+    assert re.search(rf"region points off the placed model</td><td[^>]*>0</td><td[^>]*>{note['count']}</td>", page)
+    assert f"{note['count']} points off the placed model (of either region" in page
+    magenta = to_bytes(OFF_MODEL_COLOUR)
+    regions = _figures(page, "regions and the points off their models")
+    deviation = _figures(page, "deviation colour map")
+    assert len(regions) == 2 and len(deviation) == 2
+    for image in regions:
+        assert np.all(image == magenta, axis=2).sum() > 300  # the band, in 3 x 3 dots
+    for image in deviation:
+        assert not np.all(image == magenta, axis=2).any()
+
+
+def test_a_report_without_the_scan_says_the_regions_but_draws_none(written):
+    """Without the scan there is nothing to draw the regions in: the regions section still says what
+    lies off each model."""
+    _, page, _ = written
+    assert "<h2>Regions</h2>" in page and "The reference region: " in page
+    assert not _figures(page, "regions and the points off their models")

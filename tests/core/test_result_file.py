@@ -101,6 +101,32 @@ def test_inline_regions_of_older_files_and_of_the_freecad_document_still_read(tm
     np.testing.assert_array_equal(back.regions["reference"], np.arange(10, 15))
 
 
+# What a result says of a region's points off its model (CalibrationResult.off_model).
+_NOTE = {"count": 3, "where": "most of them within 4 mm of the platform's plane, on the region's +X side",
+         "change": "Draw the region tighter on its +X side, so that it leaves the platform out"}
+
+
+def test_a_result_written_before_off_model_points_were_kept_reads_as_before(tmp_path):
+    """A result.json and side file without off-model points or notes: nothing is said of them."""
+    old = result(regions={"workpiece": np.arange(10), "reference": np.arange(10, 15), "source": "user"})
+    old.to_json(tmp_path / "result.json")
+    back = CalibrationResult.from_json(tmp_path / "result.json")
+    assert back.off_model("workpiece") is None and back.off_model("reference") is None
+
+
+def test_off_model_points_and_notes_round_trip_whole(tmp_path):
+    noted = result(regions={"workpiece": np.arange(10), "reference": np.arange(10, 15), "source": "user",
+                            "workpiece_off_model": np.arange(0), "reference_off_model": np.array([11, 12, 14]),
+                            "off_model": {"workpiece": {"count": 0, "where": "", "change": ""}, "reference": _NOTE}})
+    noted.to_json(tmp_path / "result.json")
+    counts = json.loads((tmp_path / "result.json").read_text())["regions"]["counts"]
+    assert counts["reference_off_model"] == 3 and counts["workpiece_off_model"] == 0
+    back = CalibrationResult.from_json(tmp_path / "result.json")
+    np.testing.assert_array_equal(back.off_model("reference")["indices"], [11, 12, 14])
+    assert {k: v for k, v in back.off_model("reference").items() if k != "indices"} == _NOTE
+    assert back.to_json_text() == noted.to_json_text()
+
+
 def _valid() -> dict:
     return result(regions={}).to_dict()
 
@@ -134,6 +160,15 @@ MALFORMED = {  # the findings (tracebacks) first, then their relatives
     "region of strings": _with("regions", {"workpiece": ["a"], "source": "user"}),
     "region of fractions": _with("regions", {"workpiece": [1.5, 2], "source": "user"}),
     "time a bool": _with("time_s", True),
+    "off-model points of strings": _with("regions", {"reference_off_model": ["a"], "source": "user"}),
+    "off-model note a list": _with("regions", {"off_model": [3], "source": "user"}),
+    "off-model note of another role": _with("regions", {"off_model": {"platform": _NOTE}, "source": "user"}),
+    "off-model count a string": _with("regions", {"off_model": {"reference": {**_NOTE, "count": "3"}}}),
+    "off-model count negative": _with("regions", {"off_model": {"reference": {**_NOTE, "count": -1}}}),
+    "off-model where a number": _with("regions", {"off_model": {"reference": {**_NOTE, "where": 3}}}),
+    "off-model change missing": _with("regions", {"off_model": {"reference": {"count": 0, "where": ""}}}),
+    "off-model count not the indices'": _with("regions", {"reference_off_model": [1, 2],
+                                                          "off_model": {"reference": _NOTE}}),
     "newer version": _with("version", 99),
 }
 

@@ -156,6 +156,38 @@ def test_picked_regions_are_used(simulated, document):
     assert_pose(matrix(cal.W), scene.W)
 
 
+def test_the_points_off_the_models_of_a_loose_region_come_from_the_document(tmp_path):
+    """A reference region picked around the block and a band of the platform beside it: the calibration
+    object's result says how many of its points lie off the block's model and where (fc.regions.off_model),
+    the scan's overlay gets their indices (off_model_points), and once the region is picked again without
+    them they are no longer the scan's to show."""
+    from loose_regions import platform_band_beside_the_block
+    from workcal_wb.fc import regions as fc_regions
+    from workcal_wb.fc.scan import set_regions
+
+    scene = platform_band_beside_the_block()
+    doc = FreeCAD.newDocument("WorkCalOffModel")
+    try:
+        scan = add_scan(doc, scene.cloud.points)
+        workpiece, reference = add_model(doc, scene.workpiece_model, "Workpiece"), add_model(
+            doc, scene.reference_model, "Reference")
+        set_regions(scan, workpiece=scene.regions["workpiece"], reference=scene.regions["reference"])
+        cal = co.make_calibration(doc, scan, workpiece, reference, regions="Picked", seed=SEED, resamples=2)
+        assert cal.Status == "failed" and any("reference region explained" in r for r in cal.Reasons)
+        result = co.result_of(cal)
+        said = fc_regions.off_model(cal)
+        np.testing.assert_array_equal(said["reference"]["indices"], result.regions["reference_off_model"])
+        assert said["reference"]["count"] > 1000 and "platform's plane" in said["reference"]["where"]
+        assert said["workpiece"]["count"] == 0
+        shown = fc_regions.off_model_points(scan)
+        assert list(shown) == ["reference"]
+        np.testing.assert_array_equal(shown["reference"], said["reference"]["indices"])
+        set_regions(scan, workpiece=scene.regions["workpiece"], reference=scene.block)
+        assert fc_regions.off_model_points(scan) == {}
+    finally:
+        FreeCAD.closeDocument(doc.Name)
+
+
 def test_bad_inputs_leave_the_document_unchanged(simulated, document):
     doc, objs = document
     group = doc.addObject("App::DocumentObjectGroup", "NotAModel")

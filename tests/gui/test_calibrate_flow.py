@@ -589,3 +589,78 @@ def test_15_an_ambiguous_result_shows_its_poses_and_what_would_tell_them_apart(d
     assert placed.Candidate == 0
     np.testing.assert_allclose(matrix_of(placed.Placement), first, atol=1e-9)
     guide.close()
+
+
+def test_16_a_loose_reference_box_shows_the_points_off_its_model_in_red(doc, view_driver, settle, shoot,
+                                                                         shoot_window, page_fits):
+    """The user's case: a box dragged a little loosely around the reference block takes a band of the
+    platform beside it (a mat, raised past the platform's band the calibration leaves out itself).  The
+    calibration fails on the share of the region its model explains, the 3D view draws the points its
+    model leaves unexplained in red and larger over the region (as the result lists them), and the
+    calibrate and result pages say how many, where and what to do."""
+    from loose_regions import platform_band_beside_the_block
+    from workcal_wb.fc import regions as fc_regions
+    from workcal_wb.fc.scan import get_regions, make_scan, scan_cloud
+    from workcal_wb.fc.setup import set_setup
+    from workcal_wb.gui import region_display
+    from workcal_wb.gui.commands.guide import open_guide
+    from workcal_wb.gui.commands.regions import open_pick_panel
+    from workcal_wb.gui.picking import project
+    from workcal_wb.gui.view import FROM_SCANNER, look
+
+    scene = platform_band_beside_the_block()
+    scan = make_scan(doc, scene.cloud, "Scan")
+    set_setup(doc, scan=scan, workpiece=add_model(doc, scene.workpiece_model, "Workpiece"),
+              reference=add_model(doc, scene.reference_model, "Reference"))
+    fc_regions.set_regions(scan, workpiece=scene.regions["workpiece"])
+    doc.recompute()
+    # The box, dragged in the view from the scanner around the block and the mat, a few pixels loose.
+    view = FreeCADGui.ActiveDocument.ActiveView
+    look(view, FROM_SCANNER)
+    panel = open_pick_panel(scan, "box", role="reference")
+    settle()
+    points = scan_cloud(scan).points
+    xy, valid = project(view, points[np.union1d(scene.block, scene.mat)])
+    low, high = xy[valid].min(axis=0) - 4, xy[valid].max(axis=0) + 4
+    view_driver.drag((int(low[0]), int(low[1])), (int(high[0]), int(high[1])))
+    assert panel.last_polygon is not None, "the box did not reach the tool"
+    panel.accept()
+    pump(0.2)
+    picked = get_regions(scan)["reference"]
+    assert np.isin(scene.mat, picked).mean() > 0.9 and np.isin(scene.block, picked).mean() > 0.9
+
+    guide = open_guide(doc, "calibrate")
+    page = guide.steps["calibrate"]
+    page.set_options(regions="Picked", seed=SEED, resamples=2)
+    assert page.start() and page.wait(180) == "done", page.last_error
+    cal = guide.calibration()
+    assert cal.Status == "failed" and any(r.startswith("reference region explained by its model") for r in cal.Reasons)
+    result = co.result_of(cal)
+    off, note = result.regions["reference_off_model"], result.off_model("reference")
+    assert np.isin(scene.mat, off).mean() > 0.9
+    # The overlay on the scan draws exactly the result's off-model points, larger than the regions'.
+    assert wait_for(lambda: "reference_off_model" in region_display.shown_points(scan), 10)
+    shown = region_display.shown_points(scan)
+    np.testing.assert_allclose(shown["reference_off_model"], points[off], atol=1e-3)
+    assert "workpiece_off_model" not in shown and len(result.regions["workpiece_off_model"]) == 0
+    sizes = region_display.shown_sizes(scan)
+    assert sizes[region_display.OFF_MODEL_PART + "reference"] > scan.ViewObject.PointSize + \
+        region_display.EXTRA_POINT_SIZE
+    # The result page (where the guide went) and the calibrate page say how many, where and what to do.
+    assert guide.shown == "result"
+    words = guide.steps["result"].off_model
+    assert words.isVisible() and f"holds {len(off)} points its model does not explain" in words.text()
+    guide.go("calibrate")
+    pump(0.1)
+    text = page.off_model.text()
+    assert page.off_model.isVisible() and page.correct_regions.isVisible()
+    assert f"The reference object region holds {len(off)} points its model does not explain (red in the 3D view)" \
+        in text
+    assert note["where"] in text and f"What to do: {note['change']}." in text and "Regions step" in text
+    assert "--" not in text and "Traceback" not in text
+    page_fits(guide.form)
+    shoot("16_off_model_points_in_red")
+    shoot_window("16_calibrate_step_says_what_to_do")
+    page.correct_regions.click()
+    assert guide.shown == "regions"
+    guide.close()

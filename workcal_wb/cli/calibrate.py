@@ -144,7 +144,7 @@ def run(args) -> int:
         region = result.regions.get("workpiece")
         try:
             write_report(result, outputs.folder(), workpiece_points=None if region is None else merged.points[region],
-                         workpiece_model=workpiece)
+                         workpiece_model=workpiece, scan_points=merged.points)
             manifest = outputs.commit(result.status, adding=True)
         except KeyboardInterrupt as stop:
             stop.outputs = f"{args.out} holds this run's result.json and program; the report was not written"

@@ -62,7 +62,7 @@ def run(args) -> int:
         result.to_json(staged / "result.json")
         region = result.regions.get("workpiece")
         write_report(result, staged, workpiece_points=None if region is None else scan.points[region],
-                     workpiece_model=workpiece, title="WorkCal demo: sample scene")
+                     workpiece_model=workpiece, scan_points=scan.points, title="WorkCal demo: sample scene")
         print(result.summary())
 
         written = []

@@ -20,10 +20,11 @@ from .distortion import distortion
 from .edges import slide
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .refine import coarse_to_fine
 from .match import MEDIUM_POINTS, METHODS, MIN_SCAN_POINTS, MatchOptions, match, match_pose, refine_given
+from .off_model import off_model
+from .refine import coarse_to_fine
 from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
-                      near_points, nearer_own_model, refit, standing_on)
+                      nearer_own_model, refit, standing_on)
 from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, RMS, SCAN_NOT_SOLID, UNCERTAINTY, WITHIN_TOLERANCE,
                      CalibrationResult, MatchResult, Reason)
 from .surface import SurfaceModel
@@ -98,6 +99,8 @@ KEPT_MATCH_EXTRA = 0.02
 # 0.35 mm, where every point reads none.)
 DISTORTION_POINTS = 5000
 DISTORTION_RMS_MM = 0.1
+# The share of a region its model explains, in percent, is given to hundredths (a gate's value is read).
+EXPLAINED_DIGITS = 2
 
 
 def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None,
@@ -230,10 +233,11 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
             f"{strained['shift_if_scanner_mm']:.3f} mm at the {'toolpath' if toolpath_points is not None else 'part'}. "
             "Only a reference that shows that strain can check the scanner: scan it so that two parallel faces "
             "show along each direction (an L-block's inner faces as well as its outer ones)")
-    off_model = {role: _off_model(scan, region_idx[role], surface, m)
-                 for role, surface, m in (("workpiece", workpiece_surface, U_match),
-                                          ("reference", reference_surface, V_match))}
-    gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm, off_model)
+    unexplained = _off_model(scan, region_idx, dict(workpiece=workpiece_surface, reference=reference_surface),
+                             dict(workpiece=U_match, reference=V_match), scene.platform)
+    result["regions"].update({f"{role}_off_model": found.indices for role, found in unexplained.items()},
+                             off_model={role: found.note() for role, found in unexplained.items()})
+    gates = _quality_gates(U_match, V_match, uncertainty, options.tolerance_mm, unexplained)
     status, reasons = _status(U_match, V_match, gates)
     report(1.0, f"calibration {status}")
     return CalibrationResult(status, W=W, U=U, V=V, uncertainty=uncertainty, quality_gates=gates, reasons=reasons,
@@ -276,12 +280,11 @@ def _without_the_other_object(scan: Cloud, region_idx: dict, trimmed: dict, surf
     return (matches["workpiece"], matches["reference"]), out
 
 
-def _off_model(scan: Cloud, idx: np.ndarray, surface: SurfaceModel, found: MatchResult) -> tuple[int, np.ndarray]:
-    """(how many of the region's points lie farther than its match's gate from the placed model, the
-    middle of them in the scan's frame; the region's middle when none do)."""
-    points = scan.points[idx]
-    off = ~near_points(points, surface, found.matrix, found.gate_mm if np.isfinite(found.gate_mm) else 1.0)
-    return int(off.sum()), (points[off] if off.any() else points).mean(axis=0)
+def _off_model(scan: Cloud, region_idx: dict, surfaces: dict, matches: dict, platform) -> dict:
+    """Per role, its region's points off its placed model, what they are and where (off_model.off_model)."""
+    return {role: off_model(scan.points, region_idx[role], surfaces[role], matches[role], role, platform,
+                            (other, surfaces[other], matches[other], region_idx[other]))
+            for role, other in (("workpiece", "reference"), ("reference", "workpiece"))}
 
 
 def _trimmed_words(trimmed: dict) -> list:
@@ -520,10 +523,10 @@ def _nudge(surface: SurfaceModel, size_mm: float, rng: np.random.Generator) -> n
 
 
 def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict, tolerance: float,
-                   off_model: dict) -> list:
+                   unexplained: dict) -> list:
     """The gates a calibration passes to be "ok", each with a stable "code" (its failing Reason's);
-    ``off_model``: per role, how many of its region's points lie off its placed model and where
-    (_off_model), for what to change when too many do."""
+    ``unexplained``: per role, its region's points off its placed model (off_model.OffModel), for what
+    to change when too many are."""
     gates = []
     for role, m in (("workpiece", U_match), ("reference", V_match)):
         gates.append({"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
@@ -534,13 +537,10 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
         gates.append({"code": f"{role}_{WITHIN_TOLERANCE}", "name": f"{role} points within tolerance",
                       "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
                       "unit": "%"})
-        count, where = off_model[role]
         gates.append({"code": f"{role}_explained", "name": f"{role} region explained by its model",
-                      "value": 100 * m.fitness, "limit": 100 * MIN_FITNESS[role],
+                      "value": round(100 * m.fitness, EXPLAINED_DIGITS), "limit": 100 * MIN_FITNESS[role],
                       "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%",
-                      "why": f"{count} of the region's points lie off the placed {role} model, around "
-                             f"({where[0]:.0f}, {where[1]:.0f}, {where[2]:.0f}) mm in the scan: draw the region "
-                             "tighter there, or leave those points out"})
+                      "why": unexplained[role].said(role)})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
     value = uncertainty[key]

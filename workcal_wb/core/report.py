@@ -10,7 +10,10 @@ leaves the previous report (or none), never half a file.
 
 The deviation map shows the workpiece scan region against its model X-A placed by U: signed
 distance to the model surface, positive outside (clay added), negative inside (clay carved), in the
-colours of ``deviation.DeviationScale`` (the same as FreeCAD's deviation map).
+colours of ``deviation.DeviationScale`` (the same as FreeCAD's deviation map).  Given the whole scan,
+the report also draws both regions in it; in every view the points of a region its placed model
+leaves unexplained are drawn over the rest in OFF_MODEL_COLOUR, and the regions section says how many
+there are, where they lie and what to change.
 """
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ from . import frames, picture
 from .atomic import atomic_write_text
 from .deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, DeviationScale, deviation_stats, signed_deviations
 from .errors import OutputError
-from .result import AMBIGUOUS, FAILED, OK, CalibrationResult
+from .result import AMBIGUOUS, FAILED, OFF_MODEL_KEYS, OK, CalibrationResult
 
 REPORT_FORMAT = "workcal-report"
 HTML_NAME, JSON_NAME = "report.html", "report.json"
@@ -38,6 +41,13 @@ HISTOGRAM_BINS = 60
 MAX_MAP_POINTS = 60000
 MAX_OUTLINE_POINTS = 20000
 MODEL_GREY = (0.82, 0.82, 0.82)  # the model's own points behind the scan's
+# A region's points off its placed model: magenta, which neither the deviation scale (green, yellow to
+# red, cyan to blue, their dark ends, grey) nor the regions' own colours use; drawn larger, over the rest.
+OFF_MODEL_COLOUR = (0.95, 0.0, 0.95)
+OFF_MODEL_DOT = 3
+REGION_COLOURS = {"workpiece": (1.0, 0.62, 0.3), "reference": (0.35, 0.65, 1.0)}  # the 3D view's, lighter
+# The two views of a drawing: (horizontal, vertical, depth) principal axes, and their titles.
+VIEWS = (((0, 1, 2), "view along the shortest axis"), ((0, 2, 1), "view along the middle axis"))
 
 STATUS_TEXT = {
     OK: ("OK", "W can be used: both matches and every quality gate passed."),
@@ -64,13 +74,16 @@ img{max-width:100%;border:1px solid #ddd}code{font-family:ui-monospace,Menlo,Con
 
 
 def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=None, workpiece_model=None,
-                 studies=(), title: str = "WorkCal calibration", deviation_scale: DeviationScale | None = None) -> dict:
+                 scan_points=None, studies=(), title: str = "WorkCal calibration",
+                 deviation_scale: DeviationScale | None = None) -> dict:
     """Write report.html and report.json into ``out_dir`` (created if missing); return their paths.
 
     workpiece_points: the workpiece region of the scan (N x 3, mm, in S) for the deviation map;
-    workpiece_model: X-A (Cloud or SurfaceModel); studies: StudyResults (or their dicts) whose
-    summaries, targets and figures are added; deviation_scale: the map's colours (default: the
-    calibration's tolerance).  Raises OutputError if the folder cannot be written.
+    workpiece_model: X-A (Cloud or SurfaceModel); scan_points: the whole scan (mm, in S) the result's
+    region indices point into, for the views of both regions and the points off their models;
+    studies: StudyResults (or their dicts) whose summaries, targets and figures are added;
+    deviation_scale: the map's colours (default: the calibration's tolerance).  Raises OutputError if
+    the folder cannot be written.
     """
     out = Path(out_dir)
     scale = deviation_scale or DeviationScale.for_tolerance(calibration.tolerance_mm)
@@ -88,9 +101,11 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
                       "files": {"html": HTML_NAME, "json": JSON_NAME}}
     images = {}
     if deviations is not None:
-        images["views"] = deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale)
-        images["legend"] = legend_html(scale)
+        off = _workpiece_off_model(calibration, len(deviations))
+        images["views"] = deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale, off)
+        images["legend"] = legend_html(scale, int(off.sum()))
         images["histogram"] = histogram_svg(deviations, scale)
+    images["regions"] = region_views(calibration, scan_points)
     page = _page(title, generated, _calibration_body(calibration, deviation, images, workpiece_points is not None
                                                      and workpiece_model is not None)
                  + _studies_body(studies, study_dicts))
@@ -136,10 +151,32 @@ def deviation_summary(deviations: np.ndarray, tolerance_mm: float) -> dict:
     return stats
 
 
-def deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale: DeviationScale) -> list:
+def _workpiece_off_model(calibration: CalibrationResult, count: int) -> np.ndarray:
+    """Which of the workpiece region's ``count`` points (in the order of its indices) lie off its placed
+    model; none when the result does not say, or the points given are not its region's."""
+    region, off = (calibration.regions.get(key) for key in ("workpiece", OFF_MODEL_KEYS["workpiece"]))
+    if region is None or off is None or len(region) != count:
+        return np.zeros(count, bool)
+    return np.isin(region, off)
+
+
+def _view_signs(h: int, v: int, depth: int, side: float) -> np.ndarray:
+    """The signs that turn principal-axis coordinates into a view along ``depth`` from its ``side``
+    (+1, -1): turning the view around flips the horizontal axis with the depth, so it stays a view, not
+    a mirror image."""
+    sign = np.ones(3)
+    sign[[h, depth]] = side
+    if (h, v, depth) == (0, 2, 1):  # (x, z) seen along +y is a left-handed view: turn it around
+        sign[h] *= -1
+    return sign
+
+
+def deviation_views(deviations, calibration, workpiece_points, workpiece_model, scale: DeviationScale,
+                    off_model=None) -> list:
     """Two orthographic views of the workpiece in its model frame (along the model's principal axes:
     seen from above and from the side), scan points coloured by signed deviation over the model in
-    grey: one dict per view with its title, axes, PNG bytes and the length of its scale bar (mm)."""
+    grey, those ``off_model`` (a mask, or None) over them in OFF_MODEL_COLOUR: one dict per view with
+    its title, axes, PNG bytes and the length of its scale bar (mm)."""
     points = frames.apply(frames.invert(calibration.U), np.asarray(workpiece_points, dtype=float).reshape(-1, 3))
     model_points = getattr(workpiece_model, "points", None)
     model_points = points if model_points is None else np.asarray(model_points)
@@ -150,30 +187,77 @@ def deviation_views(deviations, calibration, workpiece_points, workpiece_model, 
     rng = np.random.default_rng(0)
     keep = np.arange(len(points)) if len(points) <= MAX_MAP_POINTS else rng.choice(len(points), MAX_MAP_POINTS, False)
     local, d = (points[keep] - centre) @ axes.T, deviations[keep]
+    off = np.zeros(len(keep), bool) if off_model is None else np.asarray(off_model, bool)[keep]
     outline = model_points if len(model_points) <= MAX_OUTLINE_POINTS else \
         model_points[rng.choice(len(model_points), MAX_OUTLINE_POINTS, False)]
     outline = (outline - centre) @ axes.T
     colours = picture.to_bytes(scale.colours(d))
     views = []
-    for (h, v, depth), title in zip(((0, 1, 2), (0, 2, 1)), ("view along the shortest axis",
-                                                             "view along the middle axis")):
-        # Look from the side the scanner saw (the scan points' side of the part); turning the view
-        # around flips the horizontal axis with the depth, so it stays a view, not a mirror image.
-        side = 1.0 if local[:, depth].mean() >= 0 else -1.0
-        sign = np.ones(3)
-        sign[[h, depth]] = side
-        if (h, v, depth) == (0, 2, 1):  # (x, z) seen along +y is a left-handed view: turn it around
-            sign[h] *= -1
+    for (h, v, depth), title in VIEWS:
+        # Look from the side the scanner saw (the scan points' side of the part).
+        sign = _view_signs(h, v, depth, 1.0 if local[:, depth].mean() >= 0 else -1.0)
         seen, model = local * sign, outline * sign
         view = picture.View(np.vstack([model[:, [h, v]], seen[:, [h, v]]]))
         image = picture.canvas(view.width, view.height)
         view.draw(image, model[:, [h, v]], picture.to_bytes(MODEL_GREY))
         order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
         view.draw(image, seen[order][:, [h, v]], colours[order], dot=2)
+        view.draw(image, seen[off][:, [h, v]], picture.to_bytes(OFF_MODEL_COLOUR), dot=OFF_MODEL_DOT)
         picture.frame(image)
         bar = view.scale_bar(image)
         views.append({"title": title, "horizontal": h + 1, "vertical": v + 1, "png": picture.png(image),
                       "scale_bar_mm": bar})
+    return views
+
+
+def region_views(calibration: CalibrationResult, scan_points) -> list:
+    """Two orthographic views of both regions in the scan (along the principal axes of their points,
+    from the scanner's side), each region in its colour (REGION_COLOURS) and its points off its placed
+    model over them in OFF_MODEL_COLOUR: one dict per view with its title, PNG bytes and the length of
+    its scale bar (mm).  No views without the scan, or when the result's regions do not fit in it (the scan
+    changed since): then there is nothing right to draw."""
+    if scan_points is None:
+        return []
+    scan_points = np.asarray(scan_points, dtype=float).reshape(-1, 3)
+    rng = np.random.default_rng(0)
+    parts, off = [], []
+    for role, colour in REGION_COLOURS.items():
+        idx, off_idx = (calibration.regions.get(key) for key in (role, OFF_MODEL_KEYS[role]))
+        if idx is None or len(idx) == 0:
+            continue
+        if max(idx.max(), off_idx.max() if off_idx is not None and len(off_idx) else 0) >= len(scan_points):
+            return []
+        if len(idx) > MAX_MAP_POINTS:
+            idx = rng.choice(idx, MAX_MAP_POINTS, replace=False)
+        parts.append((scan_points[idx], np.broadcast_to(picture.to_bytes(colour), (len(idx), 3))))
+        if off_idx is not None and len(off_idx):
+            off.append(scan_points[off_idx if len(off_idx) <= MAX_MAP_POINTS else
+                                   rng.choice(off_idx, MAX_MAP_POINTS, replace=False)])
+    if not parts:
+        return []
+    points, colours = np.vstack([p for p, _ in parts]), np.vstack([c for _, c in parts])
+    off_points = np.vstack(off) if off else np.empty((0, 3))
+    centre = points.mean(axis=0)
+    _, _, axes = np.linalg.svd(points - centre, full_matrices=False)  # rows: longest axis first
+    if np.linalg.det(axes) < 0:
+        axes[2] *= -1  # right-handed, so that no view is a mirror image
+    matches = (calibration.workpiece, calibration.reference)
+    scanner = next((np.asarray(m.viewpoint["position_mm"], float) for m in matches
+                    if m is not None and "position_mm" in (m.viewpoint or {})), np.zeros(3))
+    toward_scanner = (scanner - centre) @ axes.T
+    local, off_local = (points - centre) @ axes.T, (off_points - centre) @ axes.T
+    views = []
+    for (h, v, depth), title in VIEWS:
+        sign = _view_signs(h, v, depth, 1.0 if toward_scanner[depth] >= 0 else -1.0)
+        seen, seen_off = local * sign, off_local * sign
+        view = picture.View(seen[:, [h, v]])
+        image = picture.canvas(view.width, view.height)
+        order = np.argsort(seen[:, depth])  # painter's order: nearest to the viewer drawn last
+        view.draw(image, seen[order][:, [h, v]], colours[order], dot=2)
+        view.draw(image, seen_off[:, [h, v]], picture.to_bytes(OFF_MODEL_COLOUR), dot=OFF_MODEL_DOT)
+        picture.frame(image)
+        bar = view.scale_bar(image)
+        views.append({"title": title, "png": picture.png(image), "scale_bar_mm": bar})
     return views
 
 
@@ -222,26 +306,36 @@ def histogram_svg(deviations, scale: DeviationScale) -> str:
     return "".join(out)
 
 
-def legend_html(scale: DeviationScale) -> str:
-    """The map's colour scale as HTML: a gradient from -limit to +limit with its ticks, the colours
-    past the limit and the grey of points with no model surface near them."""
-    def rgb(colour):
-        return "rgb({},{},{})".format(*picture.to_bytes(colour))
+def _rgb(colour) -> str:
+    return "rgb({},{},{})".format(*picture.to_bytes(colour))
 
+
+# A colour swatch in a legend line (its background the colour).
+SWATCH = "display:inline-block;width:1.2em;height:1em;vertical-align:middle;border:1px solid #999;background:"
+
+
+def _off_model_swatch(count: int) -> str:
+    return f"<span style='{SWATCH}{_rgb(OFF_MODEL_COLOUR)}'></span> {count} points off the placed model"
+
+
+def legend_html(scale: DeviationScale, off_model: int = 0) -> str:
+    """The map's colour scale as HTML: a gradient from -limit to +limit with its ticks, the colours
+    past the limit, the grey of points with no model surface near them and, when there are
+    ``off_model`` of them, the colour of the region's points off its placed model."""
     values = np.linspace(-scale.limit_mm, scale.limit_mm, 61)
-    stops = ",".join(f"{rgb(c)} {100 * i / (len(values) - 1):.2f}%" for i, c in enumerate(scale.colours(values)))
+    stops = ",".join(f"{_rgb(c)} {100 * i / (len(values) - 1):.2f}%" for i, c in enumerate(scale.colours(values)))
     ticks = "".join(f"<span style='position:absolute;left:{50 * (1 + t / scale.limit_mm):.1f}%;"
                     f"transform:translateX(-50%)'>{t:+.3g}</span>" for t in scale.ticks())
-    swatch = "display:inline-block;width:1.2em;height:1em;vertical-align:middle;border:1px solid #999;background:"
     return ("<div class='note' style='margin:.5em 0 1em'>"
-            f"<span style='{swatch}{rgb(BEYOND_REMOVED)}'></span> removed past {-scale.limit_mm:g} mm "
+            f"<span style='{SWATCH}{_rgb(BEYOND_REMOVED)}'></span> removed past {-scale.limit_mm:g} mm "
             f"<span style='display:inline-block;width:320px;vertical-align:middle;margin:0 .6em'>"
             f"<span style='display:block;height:1em;border:1px solid #999;background:linear-gradient(to right,{stops})'>"
             f"</span><span style='display:block;position:relative;height:1.2em'>{ticks}</span></span>"
-            f"<span style='{swatch}{rgb(BEYOND_ADDED)}'></span> added past +{scale.limit_mm:g} mm "
-            f"&nbsp; <span style='{swatch}{rgb(NO_SURFACE)}'></span> no model surface near "
-            f"&nbsp; <span style='{swatch}{rgb(MODEL_GREY)}'></span> the model X-A"
-            "<br>signed deviation (mm): + clay added, - clay removed; green within +/- "
+            f"<span style='{SWATCH}{_rgb(BEYOND_ADDED)}'></span> added past +{scale.limit_mm:g} mm "
+            f"&nbsp; <span style='{SWATCH}{_rgb(NO_SURFACE)}'></span> no model surface near "
+            f"&nbsp; <span style='{SWATCH}{_rgb(MODEL_GREY)}'></span> the model X-A"
+            + (f" &nbsp; {_off_model_swatch(off_model)} (drawn over the rest)" if off_model else "")
+            + "<br>signed deviation (mm): + clay added, - clay removed; green within +/- "
             f"{scale.tolerance_mm:g} mm</div>")
 
 
@@ -327,7 +421,43 @@ def _matches_html(calibration: CalibrationResult) -> str:
         ("time (s)", lambda m: _num(m.time_s, 2)),
     ]
     rows = [[_e(label)] + [("-" if m is None else getter(m)) for _, m in matches] for label, getter in fields]
+    notes = [calibration.off_model(role) for role in ("workpiece", "reference")]
+    if any(notes):
+        rows.append([_e("region points off the placed model")]
+                    + ["-" if n is None else _num(n["count"]) for n in notes])
     return _table(rows, ["", *(name for name, _ in matches)])
+
+
+def _regions_html(calibration: CalibrationResult, images) -> str:
+    """What each region holds that its placed model does not explain, where it lies and what to change,
+    and both regions drawn in the scan with those points over them (when the report has the scan)."""
+    sentences = []
+    for role in ("workpiece", "reference"):
+        note = calibration.off_model(role)
+        if note is None:
+            continue
+        if note["count"]:
+            sentences.append(f"The {role} region: {note['count']} points off its placed model, {note['where']}. "
+                             f"{note['change']}.")
+        else:
+            sentences.append(f"The {role} region: every point lies on its placed model.")
+    if not sentences:
+        return ""
+    out = "<h2>Regions</h2><ul>" + "".join(f"<li>{_e(s)}</li>" for s in sentences) + "</ul>"
+    for view in images.get("regions", ()):
+        out += (f"<figure style='display:inline-block;margin:.4em 1em .4em 0'><img alt=\"regions and the points off "
+                f"their models, {_e(view['title'])}\" src=\"data:image/png;base64,"
+                f"{base64.b64encode(view['png']).decode('ascii')}\"><figcaption class='note'>{_e(view['title'])} of "
+                f"both regions, from the scanner's side; the bar at the lower left is {view['scale_bar_mm']:g} mm"
+                "</figcaption></figure>")
+    if images.get("regions"):
+        count = sum(calibration.off_model(role)["count"] for role in ("workpiece", "reference")
+                    if calibration.off_model(role) is not None)
+        out += ("<div class='note' style='margin:.5em 0 1em'>"
+                + " &nbsp; ".join(f"<span style='{SWATCH}{_rgb(colour)}'></span> the {role} region"
+                                  for role, colour in REGION_COLOURS.items())
+                + f" &nbsp; {_off_model_swatch(count)} (of either region, drawn over the rest)</div>")
+    return out
 
 
 def _symmetry_sentences(calibration: CalibrationResult) -> list[str]:
@@ -441,6 +571,7 @@ def _calibration_body(calibration: CalibrationResult, deviation, images, asked: 
               "The paper's Table 1 prints the inverse of W (U^-1 V), which has the same Omega.</p>"
             + _symmetry_html(calibration)
             + "<h2>Residuals of the matches</h2>" + _matches_html(calibration)
+            + _regions_html(calibration, images)
             + "<h2>Quality gates</h2>" + _gates_html(calibration)
             + "<h2>Uncertainty</h2>" + _uncertainty_html(calibration)
             + "<h2>Deviation of the workpiece from its model</h2>" + _deviation_html(deviation, images, asked)

@@ -6,8 +6,9 @@ angles, Omega) are written for the reader but never stored: they are recomputed 
 A result file is input like any other: ``from_dict`` checks every field's type (a result.json that
 is an array, or has gates that are not a list of gates, is an InputError naming the file, never a
 traceback in whoever reads it next).  ``to_json`` writes the scan's region indices (millions for a
-large scan) to a binary side file beside result.json, ``<stem>.regions.npz``, and result.json
-records their counts, which ``from_json`` checks both ways.
+large scan), and those of each region's points off its placed model, to a binary side file beside
+result.json, ``<stem>.regions.npz``, and result.json records their counts, which ``from_json``
+checks both ways.  A file without off-model points (written before they were kept) reads as before.
 """
 from __future__ import annotations
 
@@ -30,6 +31,11 @@ STATUSES = (OK, AMBIGUOUS, FAILED)
 # Version 2: region indices in a side file; 3: each reason a code with its sentence.
 CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 3
 REGION_ROLES = ("workpiece", "reference", "platform")  # the regions that are scan point indices
+# Per matched region, the scan indices of its points off its placed model, kept as the regions are;
+# regions["off_model"] says of each how many there are, where they lie and what to change.
+OFF_MODEL_KEYS = {"workpiece": "workpiece_off_model", "reference": "reference_off_model"}
+INDEX_KEYS = REGION_ROLES + tuple(OFF_MODEL_KEYS.values())  # every scan index list a result keeps
+_OFF_MODEL_WORDS = ("where", "change")  # a region's off_model note: "count" and these sentences
 REGIONS_SUFFIX = ".regions.npz"
 _REGION_FILE_KEYS = ("counts", "indices_file")  # what result.json says of the side file
 
@@ -355,7 +361,9 @@ class CalibrationResult:
     quality_gates: list = field(default_factory=list)  # {"name", "value", "limit", "passed", "unit"[, "why"]}
     tolerance_mm: float = 0.3
     inputs: dict = field(default_factory=dict)
-    regions: dict = field(default_factory=dict)  # scan point indices per role and how they were found
+    # Scan point indices per role, and per matched region of its points off its placed model, and how
+    # they were found (source, trimmed, off_model)
+    regions: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     reasons: list = field(default_factory=list)  # Reasons
     time_s: float = 0.0
@@ -370,12 +378,20 @@ class CalibrationResult:
             self.workpiece = MatchResult.from_dict(self.workpiece, "workpiece match")
         if isinstance(self.reference, dict):
             self.reference = MatchResult.from_dict(self.reference, "reference match")
-        self.regions = {k: np.asarray(v, dtype=np.int64) if k in REGION_ROLES and v is not None else v
+        self.regions = {k: np.asarray(v, dtype=np.int64) if k in INDEX_KEYS and v is not None else v
                         for k, v in self.regions.items()}
 
     @property
     def ok(self) -> bool:
         return self.status == OK
+
+    def off_model(self, role: str) -> dict | None:
+        """What the result says of the ``role`` region's points off its placed model: "count", "where"
+        and "change" (sentences, empty when there are none) and their scan "indices" (None when read
+        without the side file); None when it says nothing (no pose to measure them from, or a file
+        written before they were kept)."""
+        note = (self.regions.get("off_model") or {}).get(role)
+        return None if note is None else {**note, "indices": self.regions.get(OFF_MODEL_KEYS[role])}
 
     def summary(self) -> str:
         """W, its angles, both matches and the uncertainty in a few lines (terminal, Report view)."""
@@ -411,8 +427,8 @@ class CalibrationResult:
             value = getattr(self, f.name)
             out[f.name] = value.to_dict() if isinstance(value, MatchResult) else _jsonable(value)
         out["reasons"] = [r.to_dict() for r in self.reasons]
-        roles = {k: v for k, v in self.regions.items() if k in REGION_ROLES and v is not None}
-        out["regions"] = {k: v for k, v in out["regions"].items() if k not in _REGION_FILE_KEYS + REGION_ROLES}
+        roles = {k: v for k, v in self.regions.items() if k in INDEX_KEYS and v is not None}
+        out["regions"] = {k: v for k, v in out["regions"].items() if k not in _REGION_FILE_KEYS + INDEX_KEYS}
         if region_indices:
             out["regions"].update(_jsonable(roles))
         else:  # read without its side file, a result still knows the counts
@@ -472,7 +488,7 @@ class CalibrationResult:
 
         path = Path(path)
         side = path.with_name(path.stem + REGIONS_SUFFIX)
-        indices = {k: v for k, v in self.regions.items() if k in REGION_ROLES and v is not None}
+        indices = {k: v for k, v in self.regions.items() if k in INDEX_KEYS and v is not None}
         if indices:
             atomic_write_bytes(side, _npz_bytes(indices))
         atomic_write_text(path, self.to_json_text(side.name))
@@ -527,23 +543,50 @@ def _read_regions(regions, source: str, folder, scan_points: int | None) -> dict
     if name is not None and folder is not None:
         regions.update(_side_file_indices(Path(folder) / name, counts, source))
         del regions["counts"]  # the arrays say it now
-    for role in REGION_ROLES:
-        if role in regions:
-            regions[role] = _indices(regions[role], source, scan_points, role)
+    for key in INDEX_KEYS:
+        if key in regions:
+            regions[key] = _indices(regions[key], source, scan_points, key)
+    _check_off_model(regions, source)
     return regions
 
 
-def _indices(values, source: str, scan_points: int | None, role: str) -> np.ndarray:
+def _index_words(key: str) -> str:
+    """An index list of the regions in words: "workpiece", "reference off-model"."""
+    return key.replace("_off_model", " off-model")
+
+
+def _indices(values, source: str, scan_points: int | None, key: str) -> np.ndarray:
     try:
         array = np.asarray(values)
     except (ValueError, TypeError, OverflowError):  # ragged lists, absurd numbers
         array = None
     if array is None or array.ndim != 1 or (len(array) and array.dtype.kind not in "iu"):
-        raise InputError(f"{source}: the {role} region must be a list of whole point indices")
+        what = f"the {key} region" if key in REGION_ROLES else f"the {_index_words(key)} points"
+        raise InputError(f"{source}: {what} must be a list of whole point indices")
     array = array.astype(np.int64)
     if len(array) and (array.min() < 0 or (scan_points is not None and array.max() >= scan_points)):
-        raise InputError(f"{source}: {role} indices outside the scan's {scan_points} points")
+        raise InputError(f"{source}: {_index_words(key)} indices outside the scan's {scan_points} points")
     return array
+
+
+def _check_off_model(regions: dict, source: str) -> None:
+    """regions["off_model"], when there: per matched role, {"count": whole number, "where": text,
+    "change": text}, its count that of the role's off-model indices when they are read too."""
+    notes = regions.get("off_model")
+    if notes is None:
+        return
+    if not isinstance(notes, dict) or not set(notes) <= set(OFF_MODEL_KEYS):
+        raise InputError(f"{source}: regions.off_model must be an object with a note per region "
+                         f"({' and '.join(OFF_MODEL_KEYS)})")
+    for role, note in notes.items():
+        if not (isinstance(note, dict) and _is(note.get("count"), (int,)) and note["count"] >= 0
+                and all(_is(note.get(key), _TEXT) for key in _OFF_MODEL_WORDS)):
+            raise InputError(f"{source}: regions.off_model.{role} must hold count (a whole number) and "
+                             f"{' and '.join(_OFF_MODEL_WORDS)} (strings)")
+        indices = regions.get(OFF_MODEL_KEYS[role])
+        if isinstance(indices, np.ndarray) and len(indices) != note["count"]:
+            raise InputError(f"{source}: regions.off_model.{role} counts {note['count']} points, its "
+                             f"{_index_words(OFF_MODEL_KEYS[role])} indices are {len(indices)}")
 
 
 def _side_file_indices(path: Path, counts: dict, source: str) -> dict:

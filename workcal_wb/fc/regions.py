@@ -7,6 +7,10 @@ the document, so the GUI runs it in a worker thread; it remembers its last answe
 
 Picked regions are recorded as index ranges (``ranges``/``indices``): a box picked on a scan taken
 row by row is a few hundred runs, short enough for a macro line.
+
+After a calibration, ``off_model(calibration)`` says of each region the points its placed model
+leaves unexplained (how many, where, what to change) and ``off_model_points(scan)`` gives their
+indices for the 3D view, while the scan's regions still hold them.
 """
 from __future__ import annotations
 
@@ -16,7 +20,7 @@ import numpy as np
 
 import FreeCAD
 
-from workcal_wb.core.errors import InputError
+from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.fc import prefs
 from workcal_wb.fc import scan as fc_scan
 from workcal_wb.fc.memo import LastResult
@@ -95,6 +99,48 @@ def clear_regions(scan) -> bool:
         fc_scan.set_regions(scan)
     FreeCAD.Console.PrintMessage(f"WorkCal: regions of {scan.Label} cleared\n")
     return True
+
+
+def off_model(calibration) -> dict:
+    """Per region ("workpiece", "reference"), what the calibration's result says of its points off its
+    placed model: "indices" (scan indices), "count", "where" and "change" (sentences, empty when there
+    are none); only the regions it says something of ({} for a calibration not computed, or one that
+    matched nothing)."""
+    from workcal_wb.fc.calibration_object import result_of
+
+    if not getattr(calibration, "ResultJson", ""):
+        return {}
+    try:
+        result = result_of(calibration)
+    except WorkCalError:
+        return {}
+    notes = {role: result.off_model(role) for role in ("workpiece", "reference")}
+    return {role: note for role, note in notes.items() if note is not None and note["indices"] is not None}
+
+
+def off_model_points(scan) -> dict:
+    """{role: scan indices} of the points off their placed models in the latest calibration of ``scan``,
+    as the 3D view draws them; a region's are left out when the calibration used picked regions and the
+    scan's region no longer holds them all (picked again since), and all when they no longer fit the scan."""
+    from workcal_wb.fc.calibration_object import find_calibrations
+
+    calibration = next((c for c in reversed(find_calibrations(scan.Document)) if c.Scan is scan and c.ResultJson),
+                       None)
+    if calibration is None:
+        return {}
+    try:
+        count, regions = fc_scan.point_count(scan), fc_scan.get_regions(scan)
+    except WorkCalError:
+        return {}
+    found = {}
+    for role, note in off_model(calibration).items():
+        idx = note["indices"]
+        if len(idx) == 0 or idx.max() >= count:
+            continue
+        if calibration.Regions == "Picked" and (regions[role] is None or not np.isin(idx, regions[role]).all()):
+            continue
+        found[role] = idx
+    return found
 
 
 def ranges(idx) -> list:

@@ -2,8 +2,9 @@
 
 ``write_report(calibration)`` writes report.html and report.json (``core.report``) with the deviation
 map of the workpiece region in the same colour scale as the calibration's deviation map in the 3D view
-(or the default scale when there is none).  When the scan no longer has the region's points, the
-report is written without the map and says so in the Report view.
+(or the default scale when there is none), and both regions drawn in the scan with the points off
+their models.  When the scan no longer has the region's points, the report is written without the
+map and says so in the Report view.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from workcal_wb.core.deviation import DeviationScale
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.fc import prefs
 from workcal_wb.fc.calibration_object import result_of, workpiece_region
+from workcal_wb.fc.scan import scan_cloud
 
 
 def default_report_dir(calibration) -> str:
@@ -43,6 +45,10 @@ def report_data(calibration) -> dict:
         data.update(workpiece_points=points, workpiece_model=model)
     except WorkCalError as exc:  # the report still shows every number
         FreeCAD.Console.PrintWarning(f"WorkCal: report without the deviation map: {exc}\n")
+    try:  # both regions drawn in the scan, with the points off their models
+        data["scan_points"] = scan_cloud(calibration.Scan).points
+    except WorkCalError as exc:
+        FreeCAD.Console.PrintWarning(f"WorkCal: report without the views of the regions: {exc}\n")
     return data
 
 

@@ -1,6 +1,7 @@
 """The calibration: coloured triads of the frames with their names, double-click opens its result in
 the guide, and the right-click menu offers the workpiece model in the robot frame and the deviation
-map (both through their recorded commands)."""
+map (both through their recorded commands).  A new result redraws its scan's region overlay, which
+shows the points off the placed models."""
 import FreeCAD
 
 from workcal_wb.core.errors import WorkCalError
@@ -35,6 +36,20 @@ class ViewProviderCalibration(ViewProvider):
         if prop in ("Shape", "ResultJson", "Frames"):
             self._update_labels(obj)
             self._colour_edges(obj)
+        if prop in ("ResultJson", "Scan"):  # the scan shows the points off the placed models in red
+            self._update_scan_overlay(obj)
+
+    @staticmethod
+    def _update_scan_overlay(obj):
+        from workcal_wb.gui import region_display
+
+        scan = getattr(obj, "Scan", None)
+        if scan is not None and getattr(scan, "ViewObject", None) is not None:
+            region_display.schedule(scan)
+
+    def onDelete(self, vobj, subelements):
+        self._update_scan_overlay(vobj.Object)  # once it is gone: its off-model points go with it
+        return True
 
     def _colour_edges(self, obj):
         vobj = getattr(obj, "ViewObject", None)

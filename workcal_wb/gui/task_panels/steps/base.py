@@ -66,6 +66,27 @@ class Step:
         return result
 
 
+def off_model_advice(calibration) -> str:
+    """For a calibration that is not ok: per region, how many of its points its placed model leaves
+    unexplained (the red points in the 3D view), where they lie and what to do, in plain words; "" when
+    the calibration is ok or says nothing of them."""
+    from workcal_wb.fc.regions import off_model
+
+    if calibration is None or calibration.Status in ("ok", "new"):
+        return ""
+    paragraphs = []
+    for role, note in off_model(calibration).items():
+        if not note["count"]:
+            continue
+        region = translate("WorkCal", "workpiece") if role == "workpiece" else translate("WorkCal", "reference object")
+        paragraphs.append(translate("WorkCal", "The {} region holds {} points its model does not explain (red in the "
+                                               "3D view), {}.\nWhat to do: {}. Pick the region again in the Regions "
+                                               "step, or take the red points out of it with Subtract (Ctrl), then "
+                                               "calibrate again.").format(region, note["count"], note["where"],
+                                                                          note["change"]))
+    return "\n\n".join(paragraphs)
+
+
 def reveal(widget) -> None:
     """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight."""
     parent = widget.parentWidget()

@@ -6,6 +6,8 @@ and, when it has finished, the recorded ``fc.calibration_object.make_calibration
 the worker's result instead of computing it again.  An error or a cancel leaves the document as it
 was.  Options a designer rarely touches (method, seed, refits, where the scanner stood, which way is
 up) sit under "Advanced options"; the scanner position and the up direction left empty are automatic.
+After a calibration that is not ok, the page says what each region holds that its model does not
+explain (the red points in the 3D view), where, and what to change.
 """
 from __future__ import annotations
 
@@ -19,7 +21,7 @@ from workcal_wb.fc import prefs
 from workcal_wb.gui import replay
 from workcal_wb.gui.task_panels import QtCore, QtWidgets
 
-from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, row
+from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
 
 translate = FreeCAD.Qt.translate
 
@@ -77,6 +79,17 @@ class CalibrateStep(Step):
         self.status = None  # the status-bar progress bar while running
         self.state_name = "idle"  # idle, running, cancelling, done, failed, cancelled
         self.last_error = ""
+        # At the top, in sight when the page opens: what a region holds that its model does not explain,
+        # and what to change, after a calibration that is not ok.
+        self.off_model = label(name="WorkCalOffModel")
+        self.off_model.setStyleSheet("QLabel { color: #c62828; }")
+        layout.addWidget(self.off_model)
+        self.correct_regions = button(translate("WorkCal", "Correct the regions"),
+                                      translate("WorkCal", "Go to the Regions step to pick the regions again"),
+                                      lambda: self.guide.go("regions"), "WorkCalCorrectRegions")
+        layout.addWidget(self.correct_regions)
+        for widget in (self.off_model, self.correct_regions):  # until a calibration says something
+            widget.setVisible(False)
         options = form_layout()
         self.tolerance = QtWidgets.QDoubleSpinBox()
         self.tolerance.setObjectName("WorkCal_tolerance")
@@ -199,6 +212,15 @@ class CalibrateStep(Step):
         (self.picked_regions if picked and self.picked_regions.isEnabled() else self.auto_regions).setChecked(True)
         self.start_button.setText(translate("WorkCal", "Calibrate again") if calibration is not None
                                   else translate("WorkCal", "Calibrate"))
+        self._show_off_model(calibration)
+
+    def _show_off_model(self, calibration) -> None:
+        if not self._alive():
+            return
+        advice = off_model_advice(calibration)
+        self.off_model.setText(advice)
+        self.off_model.setVisible(bool(advice))
+        self.correct_regions.setVisible(bool(advice))
 
     def set_options(self, tolerance_mm=None, regions=None, method=None, seed=None, resamples=None,
                     scanner_origin=KEEP, up=KEEP) -> None:
@@ -342,6 +364,7 @@ class CalibrateStep(Step):
             return
         self._end("done")
         self._show(1.0, translate("WorkCal", "Calibration {}").format(result.status))
+        self._show_off_model(self.guide.calibration())
         if self.guide.alive():
             self.guide.go("result")
 

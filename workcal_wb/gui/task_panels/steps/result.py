@@ -3,7 +3,9 @@
 The verdict in colour, W as FreeCAD's placement (position, axis and angle) and as the paper's Z-Y-Z
 angles and Omega, the checks as a table, the uncertainty at the toolpath, the models placed on the
 scan, and Accept / Calibrate again / Open the report.  For an ambiguous result the other poses the
-match found can be stepped through in the view, with the sentence on what would tell them apart.
+match found can be stepped through in the view, with the sentence on what would tell them apart; for
+a result that is not ok, what each region holds that its model does not explain (red in the view)
+and what to change.
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from workcal_wb.gui import replay
 from workcal_wb.gui.task_panels import QtWidgets
 from workcal_wb.gui.view import FROM_SCANNER
 
-from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, row
+from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
 
 translate = FreeCAD.Qt.translate
 
@@ -47,6 +49,15 @@ class ResultStep(Step):
         layout.addWidget(self.verdict)
         self.reasons = label(name="WorkCalReasons")
         layout.addWidget(self.reasons)
+        self.off_model = label(name="WorkCalResultOffModel")
+        self.off_model.setStyleSheet("QLabel { color: #c62828; }")
+        layout.addWidget(self.off_model)
+        self.correct_regions = button(translate("WorkCal", "Correct the regions"),
+                                      translate("WorkCal", "Go to the Regions step to pick the regions again"),
+                                      lambda: self.guide.go("regions"), "WorkCalResultCorrectRegions")
+        layout.addWidget(self.correct_regions)
+        for widget in (self.off_model, self.correct_regions):  # until a calibration says something
+            widget.setVisible(False)
 
         where = QtWidgets.QGroupBox(translate("WorkCal", "Where the workpiece is"))
         where.setToolTip(translate("WorkCal", "W = ^B X = V^-1 U: the workpiece frame X in the robot base frame B"))
@@ -147,6 +158,8 @@ class ResultStep(Step):
             self.verdict.setStyleSheet("")
             self.reasons.setText("")
             self.poses.setVisible(False)
+            for widget in (self.off_model, self.correct_regions):
+                widget.setVisible(False)
             return
         colour, words = VERDICTS.get(calibration.Status, VERDICTS["error"])
         self.verdict.setText(words)
@@ -154,6 +167,10 @@ class ResultStep(Step):
                                    "padding: 6px; border-radius: 4px; }")
         self.reasons.setText("\n".join(f"- {r}" for r in calibration.Reasons))
         self.reasons.setVisible(bool(calibration.Reasons))
+        advice = off_model_advice(calibration)
+        self.off_model.setText(advice)
+        for widget in (self.off_model, self.correct_regions):
+            widget.setVisible(bool(advice))
         W = None if result is None else result.W
         if W is None:
             for widget in (self.position, self.rotation, self.euler, self.omega):
