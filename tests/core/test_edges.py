@@ -149,3 +149,16 @@ def test_flipped_tile_leaving_points_beside_its_outline_is_not_held_by_its_edges
     right = np.linalg.norm(frames.apply(frames.invert(truth) @ result.matrix, surface.points) - surface.points,
                            axis=1).max() < 1.0
     assert result.status != "ok" or right, result.reasons
+
+
+def test_only_a_sharp_edge_is_taken_for_one_a_scan_stops_short_of():
+    """A block's edge turns its surface 90 deg; a smooth body's curvature a few degrees across the same
+    span: only the first can leave a scan's points a pixel short of it, and so bias a centred pose."""
+    from workcal_wb.core.edges import _at_sharp_edges
+
+    block = SurfaceModel(shapes.l_block(), 0)
+    along_edge = np.column_stack([np.linspace(40, 110, 50), np.full(50, 0.2), np.full(50, 59.8)])  # top front edge
+    mid_face = np.column_stack([np.linspace(40, 110, 50), np.full(50, 15.0), np.full(50, 60.0)])
+    assert _at_sharp_edges(block, along_edge) and not _at_sharp_edges(block, mid_face)
+    body = SurfaceModel(shapes.ellipsoid(), 0)
+    assert not _at_sharp_edges(body, body.points[::97])

@@ -38,6 +38,10 @@ EXTRA_OFF_POINTS, COUNT_SIGMAS = 5, 3.0
 REACH_TOLERANCES = 2.0
 # Profile samples across the reach each way, then halvings of the step at each end.
 PROFILE_STEPS, BISECTIONS = 12, 5
+# A point crossing lies at a sharp edge of the model when, within SHARP_SPACINGS sample spacings of it,
+# the surface's normals turn by more than SHARP_DEG (a block's edge turns 90; a smooth body's curvature
+# a few degrees over that span).  Only sharp edges leave a scan's points stopping short of them.
+SHARP_DEG, SHARP_SPACINGS, SHARP_NEIGHBOURS = 30.0, 3.0, 16
 
 
 def has_weak_motion(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, gate: float, scale: float) -> bool:
@@ -76,14 +80,16 @@ def centre_on_edges(points: np.ndarray, surface: SurfaceModel, T: np.ndarray, ga
         if interval is None:  # faces that hold it weakly and no edge within reach: the data leave it free
             free.append(describe_motion(vecs[:, i], centre, radius))
             continue
-        lo, hi = interval
+        lo, hi, crossing = interval
         T = slide(twist, centre, (lo + hi) / 2) @ T
         # The truth lies where neither edge has begun to lose points: at least ``threshold`` in from each
         # end.  The middle is off it by at most the rest of the slack, when one edge's points run right up
         # to it and the other's stop short (a fold edge seen on both faces against a silhouette, whose
         # last pixels are mixed with what lies behind): a bias the refits, centring alike, cannot see.
+        # A smooth body's near-symmetry spreads its points off alike both ways: no such bias.
+        bias = max((hi - lo) / 2 - threshold, 0.0) if _at_sharp_edges(surface, crossing) else 0.0
         held.append({"motion": describe_motion(vecs[:, i], centre, radius), "eigenvalue": float(vals[i]),
-                     "slack_mm": float((hi - lo) / 2), "bias_mm": float(max((hi - lo) / 2 - threshold, 0.0)),
+                     "slack_mm": float((hi - lo) / 2), "bias_mm": float(bias),
                      "twist": twist.tolist(), "centre": centre.tolist()})
     return T, {"ratio": float(vals[0]), "eigenvalues": vals.tolist(), "free_motions": free,
                "constrained": not free, "held_by_edges": held}
@@ -106,9 +112,9 @@ def slide(twist, centre, amount: float) -> np.ndarray:
 
 
 def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, threshold: float, reach: float):
-    """(lo, hi) amounts of ``twist`` between which the count of points off the surface stays
-    within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, or None when the slide
-    meets no edge within ``reach`` on a side."""
+    """(lo, hi, points): the amounts of ``twist`` between which the count of points off the surface stays
+    within the allowance (EXTRA_OFF_POINTS, COUNT_SIGMAS) of its fewest, and the points that cross an edge
+    within reach; None when the slide meets no edge within ``reach`` on a side."""
     def distance(points, amount):
         return surface.exact_distance(frames.apply(slide(twist, centre, amount), points))
 
@@ -141,4 +147,13 @@ def _edge_interval(moved: np.ndarray, surface: SurfaceModel, twist, centre, thre
             inside, outside = (middle, outside) if off(points, middle).sum() <= limit else (inside, middle)
         return (inside + outside) / 2
 
-    return crossing(amounts[first], amounts[first - 1]), crossing(amounts[last], amounts[last + 1])
+    return crossing(amounts[first], amounts[first - 1]), crossing(amounts[last], amounts[last + 1]), points
+
+
+def _at_sharp_edges(surface: SurfaceModel, points: np.ndarray) -> bool:
+    """Whether most of ``points`` (model frame) lie at a sharp edge of the model (SHARP_DEG)."""
+    near = surface.tree.query(points, SHARP_NEIGHBOURS, distance_upper_bound=SHARP_SPACINGS * surface.spacing)[1]
+    found = near < len(surface.points)
+    normals = surface.normals[np.where(found, near, 0)]
+    turned = np.einsum("ikj,ij->ik", normals, normals[:, 0]) < np.cos(np.radians(SHARP_DEG))
+    return bool(np.mean((turned & found).any(axis=1)) >= 0.5)
