@@ -65,6 +65,32 @@ def test_a_toolpath_made_for_another_part_is_not_written(scene_files, tmp_path, 
     assert not list(out.glob("toolpath_calibrated.*"))
 
 
+def test_calibrate_with_a_robot_plots_its_joint_margins_in_the_report(scene_files, tmp_path, capsys):
+    """The program checked against the robot: the report shows each joint's margin at every robot target
+    (the same margins the program's header states), and what the robot cannot follow it says, and where."""
+    folder, _ = scene_files
+    robot_args = ("--toolpath", str(folder / "toolpath.nc"), "--format", "krl", "--tool", "0,0,150,0,0,0")
+    assert main(_args(folder, tmp_path / "kr16", *robot_args, "--robot", "kuka_kr16_2")) == 0
+    page = (tmp_path / "kr16" / "report.html").read_text(encoding="utf-8")
+    lines = re.findall(r'<polyline data-joint="(A\d)" points="([^"]+)"', page)
+    assert [joint for joint, _ in lines] == ["A1", "A2", "A3", "A4", "A5", "A6"]
+    reach = json.loads((tmp_path / "kr16" / "report.json").read_text())["reach"]
+    program = (tmp_path / "kr16" / "toolpath_calibrated.src").read_text()
+    smallest = reach["smallest_margin"]
+    assert not smallest["on_the_way"]  # at a robot target, so a point of its joint's line
+    assert f"smallest joint-limit margin {smallest['deg']:.1f} deg ({smallest['joint']} at" in program
+    worst = dict(pair.split(",") for pair in dict(lines)[smallest["joint"]].split())
+    assert float(worst[str(smallest["target"])]) == pytest.approx(smallest["deg"], abs=1e-3)
+    assert min(float(v) for _, points in lines for v in points.replace(" ", ",").split(",")[1::2]) == \
+        pytest.approx(smallest["deg"], abs=1e-3)
+    # A robot too small for where the part sits: no program, and the report says why.
+    assert main(_args(folder, tmp_path / "kr6", *robot_args, "--robot", "kuka_kr6_r700_sixx")) == 1
+    page = (tmp_path / "kr6" / "report.html").read_text(encoding="utf-8")
+    assert "KUKA KR 6 R700 sixx (kuka_kr6_r700_sixx) cannot follow the calibrated program: robot target 1" in page
+    assert json.loads((tmp_path / "kr6" / "report.json").read_text())["reach"]["problem"] == "out_of_reach"
+    capsys.readouterr()
+
+
 def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):
     folder, _ = scene_files
     # The workpiece "region" is the first image rows: bare platform, nothing to fix a pose on.

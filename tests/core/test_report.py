@@ -350,3 +350,78 @@ def test_a_report_without_the_scan_says_the_regions_but_draws_none(written):
     _, page, _ = written
     assert "<h2>Regions</h2>" in page and "The reference region: " in page
     assert not _figures(page, "regions and the points off their models")
+
+
+# --------------------------------------------------------------------------- joint margins along the program
+
+POLYLINE = re.compile(r'<polyline data-joint="([^"]+)" points="([^"]+)"')
+
+
+def margin_report(end_x: float):
+    """A KR 16-2 checked along a line of 40 targets pointing down, from x 900 mm to ``end_x``, lines 11 on."""
+    from workcal_wb.core.robots import load_robot
+    from workcal_wb.core.robots.model import xyzabc_transform
+    from workcal_wb.core.robots.reach import check_reach
+
+    robot = load_robot("kuka_kr16_2")
+    poses = np.tile(np.eye(4), (40, 1, 1))
+    poses[:, :3, :3] = frames.rot_y(180.0)
+    poses[:, :3, 3] = np.linspace((900.0, -400.0, 300.0), (end_x, 400.0, 300.0), 40)
+    tool = xyzabc_transform([0.0, 0.0, 150.0, 0.0, 0.0, 0.0])
+    return robot, check_reach(robot, poses, tool, source_lines=np.arange(40) + 11)
+
+
+def plotted_lines(page: str) -> dict:
+    """Joint name -> {target number: margin (deg)} of the margin plot's polylines."""
+    return {joint: {int(float(x)): float(y) for x, y in (pair.split(",") for pair in points.split())}
+            for joint, points in POLYLINE.findall(page)}
+
+
+def test_the_report_plots_each_joints_margin_along_the_program(tmp_path):
+    """Six polylines, one per joint, their points (target number, margin in deg) the ReachReport's margins
+    at the targets; the limit line, the smallest margin marked; report.json says where it is."""
+    from workcal_wb.core.robots import joint_margins_deg
+
+    robot, reach = margin_report(1300.0)
+    assert reach.reachable
+    paths = write_report(CalibrationResult("ok", np.eye(4)), tmp_path, robot=robot, reach=reach)
+    page = paths["html"].read_text(encoding="utf-8")
+    lines = plotted_lines(page)
+    assert list(lines) == ["A1", "A2", "A3", "A4", "A5", "A6"] and page.count("<polyline") == 6
+    margins = joint_margins_deg(robot, reach.joints)  # (40, 6)
+    for joint, name in enumerate(lines):
+        assert sorted(lines[name]) == list(range(1, 41))
+        for target in (1, 17, 40):
+            assert lines[name][target] == pytest.approx(margins[target - 1, joint], abs=1e-3)
+    m = reach.margin
+    assert "joint limit</text>" in page and page.count('class="worst"') == 1
+    assert f"smallest: A{m.joint + 1} {m.value:.1f} deg {m.where.on()}" in page
+    assert "<h2>Robot reach</h2>" in page and "follows the calibrated program, all 40 robot targets" in page
+    data = json.loads(paths["json"].read_text(encoding="utf-8"))["reach"]
+    assert data["robot"] == "kuka_kr16_2" and data["problem"] is None
+    assert data["smallest_margin"]["joint"] == f"A{m.joint + 1}" and data["smallest_margin"]["deg"] == m.value
+
+
+def test_a_program_the_robot_cannot_follow_is_plotted_up_to_where_it_fails(tmp_path):
+    robot, reach = margin_report(2600.0)
+    assert reach.problem == "out_of_reach"
+    page = write_report(CalibrationResult("ok", np.eye(4)), tmp_path, robot=robot, reach=reach)["html"].read_text(
+        encoding="utf-8")
+    followed = int(np.flatnonzero(~np.isnan(reach.joints[:, 0]))[-1]) + 1
+    assert all(max(line) == followed < 40 for line in plotted_lines(page).values())
+    assert f"fails {reach.problem_at.on()}" in page and "cannot follow the calibrated program" in page
+
+
+def test_a_long_program_keeps_every_dip_towards_a_limit(tmp_path, monkeypatch):
+    """Past MAX_PLOTTED_TARGETS a line keeps, per stretch of targets, the one nearest the limit: the
+    smallest margin of each joint is still drawn."""
+    from workcal_wb.core import report
+    from workcal_wb.core.robots import joint_margins_deg
+
+    monkeypatch.setattr(report, "MAX_PLOTTED_TARGETS", 7)
+    robot, reach = margin_report(1300.0)
+    lines = plotted_lines(report.joint_margins_svg(robot, reach))
+    margins = joint_margins_deg(robot, reach.joints)
+    for joint, name in enumerate(lines):
+        assert len(lines[name]) == 7
+        assert min(lines[name].values()) == pytest.approx(margins[:, joint].min(), abs=1e-3)

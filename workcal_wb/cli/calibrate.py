@@ -17,7 +17,7 @@ from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
 from workcal_wb.core.result import FAILED
-from workcal_wb.core.toolpath import FORMATS, ExportRefused, export, read_gcode
+from workcal_wb.core.toolpath import FORMATS, ExportRefused, ReachRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
 PROGRAM_STEM = "toolpath_calibrated"
@@ -139,12 +139,12 @@ def run(args) -> int:
 
         # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
-        refused, forced = _program(args, toolpath, result, outputs, workpiece)
+        refused, forced, reach = _program(args, toolpath, result, outputs, workpiece)
         outputs.commit(result.status)
         region = result.regions.get("workpiece")
         try:
             write_report(result, outputs.folder(), workpiece_points=None if region is None else merged.points[region],
-                         workpiece_model=workpiece, scan_points=merged.points)
+                         workpiece_model=workpiece, scan_points=merged.points, robot=args.robot, reach=reach)
             manifest = outputs.commit(result.status, adding=True)
         except KeyboardInterrupt as stop:
             stop.outputs = f"{args.out} holds this run's result.json and program; the report was not written"
@@ -159,12 +159,13 @@ def run(args) -> int:
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
 
-def _program(args, toolpath, result, outputs, workpiece) -> tuple[str | None, list]:
-    """Stage the calibrated program: (the reason when it is refused, else None; the reasons it was forced)."""
+def _program(args, toolpath, result, outputs, workpiece) -> tuple:
+    """Stage the calibrated program: (the reason when it is refused, else None; the reasons it was forced;
+    the robot's reach along it, robots.reach.ReachReport, None when no robot was given or it was not checked)."""
     if toolpath is None:
-        return None, []
+        return None, [], None
     if result.W is None:
-        return "the calibration found no W", []
+        return "the calibration found no W", [], None
     name = f"{PROGRAM_STEM}{FORMATS[args.format].EXTENSION}"
     try:
         job = export(toolpath, result, args.format, outputs.file(name), force=args.force, machine=args.machine,
@@ -172,5 +173,5 @@ def _program(args, toolpath, result, outputs, workpiece) -> tuple[str | None, li
                      calibration_source=str(Path(args.out) / "result.json"), workpiece_model=workpiece,
                      path_reach_mm=args.path_reach, **robot_options(args))
     except ExportRefused as exc:
-        return f"{exc}{way_out(exc)}", []
-    return None, forced_warnings(job)
+        return f"{exc}{way_out(exc)}", [], exc.report if isinstance(exc, ReachRefused) else None
+    return None, forced_warnings(job), job.reach

@@ -75,15 +75,16 @@ img{max-width:100%;border:1px solid #ddd}code{font-family:ui-monospace,Menlo,Con
 
 def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=None, workpiece_model=None,
                  scan_points=None, studies=(), title: str = "WorkCal calibration",
-                 deviation_scale: DeviationScale | None = None) -> dict:
+                 deviation_scale: DeviationScale | None = None, robot=None, reach=None) -> dict:
     """Write report.html and report.json into ``out_dir`` (created if missing); return their paths.
 
     workpiece_points: the workpiece region of the scan (N x 3, mm, in S) for the deviation map;
     workpiece_model: X-A (Cloud or SurfaceModel); scan_points: the whole scan (mm, in S) the result's
     region indices point into, for the views of both regions and the points off their models;
     studies: StudyResults (or their dicts) whose summaries, targets and figures are added;
-    deviation_scale: the map's colours (default: the calibration's tolerance).  Raises OutputError if
-    the folder cannot be written.
+    deviation_scale: the map's colours (default: the calibration's tolerance); robot (robots.Robot) and
+    reach (its robots.reach.ReachReport for the calibrated program): the joint margins along the program.
+    Raises OutputError if the folder cannot be written.
     """
     out = Path(out_dir)
     scale = deviation_scale or DeviationScale.for_tolerance(calibration.tolerance_mm)
@@ -97,6 +98,8 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
     data = calibration.to_dict(region_indices=False)
     data["deviation"] = deviation
     data["studies"] = study_dicts
+    if robot is not None and reach is not None:
+        data["reach"] = reach_summary(robot, reach)
     data["report"] = {"format": REPORT_FORMAT, "version": 1, "title": title, "generated": generated,
                       "files": {"html": HTML_NAME, "json": JSON_NAME}}
     images = {}
@@ -108,6 +111,7 @@ def write_report(calibration: CalibrationResult, out_dir, *, workpiece_points=No
     images["regions"] = region_views(calibration, scan_points)
     page = _page(title, generated, _calibration_body(calibration, deviation, images, workpiece_points is not None
                                                      and workpiece_model is not None)
+                 + (_reach_html(robot, reach) if robot is not None and reach is not None else "")
                  + _studies_body(studies, study_dicts))
     paths = {"html": out / HTML_NAME, "json": out / JSON_NAME}
     _write(out, [(paths["json"], json.dumps(data, indent=2, allow_nan=True) + "\n"), (paths["html"], page)])
@@ -308,6 +312,158 @@ def histogram_svg(deviations, scale: DeviationScale) -> str:
 
 def _rgb(colour) -> str:
     return "rgb({},{},{})".format(*picture.to_bytes(colour))
+
+
+# --- joint margins along the program -------------------------------------------------------------------
+
+# The six joints' colours in the margin plot (the Tableau 10 palette: told apart also in print).
+JOINT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
+# Most robot targets a margin line is drawn through; a longer program keeps, per stretch of targets and
+# per joint, the target nearest the limit, so that no dip towards a limit is lost and the page stays small.
+MAX_PLOTTED_TARGETS = 2000
+
+
+def reach_summary(robot, reach) -> dict:
+    """What report.json says of the robot's reach: the robot, whether it follows the program (else why),
+    the smallest joint margin and where."""
+    from .robots.reach import joint_name
+
+    margin = reach.margin
+    return {"robot": robot.id, "robot_name": robot.name, "targets": reach.targets, "problem": reach.problem,
+            "reason": reach.reason,
+            "smallest_margin": None if margin is None else {
+                "joint": joint_name(robot, margin.joint), "deg": margin.value, "target": margin.where.target + 1,
+                "line": margin.where.line, "on_the_way": margin.where.on_the_way}}
+
+
+def target_margins(robot, reach) -> np.ndarray:
+    """(N, 6) each joint's margin to its nearer limit (deg) at every robot target, NaN past a problem."""
+    from .robots.kinematics import joint_margins_deg
+
+    return joint_margins_deg(robot, reach.joints)
+
+
+def _plotted_targets(margins: np.ndarray) -> list:
+    """Per joint, the 0-based targets its line is drawn through: every target the robot reaches, or for a
+    longer program than MAX_PLOTTED_TARGETS the one nearest the limit in each of that many stretches."""
+    reached = np.flatnonzero(~np.isnan(margins).any(axis=1))
+    if len(reached) <= MAX_PLOTTED_TARGETS:
+        return [reached] * margins.shape[1]
+    stretches = np.array_split(reached, MAX_PLOTTED_TARGETS)
+    return [np.array([stretch[np.argmin(margins[stretch, joint])] for stretch in stretches])
+            for joint in range(margins.shape[1])]
+
+
+def joint_margins_svg(robot, reach) -> str:
+    """Each joint's margin to its nearer limit (deg) over the program's robot targets as inline SVG: one
+    polyline per joint (``data-joint``, its points in data units: target number from 1, margin in deg,
+    drawn through a transform), the limit at 0 dashed, the smallest margin marked, and where a refused
+    program fails."""
+    from .robots.reach import joint_name
+
+    margins = target_margins(robot, reach)
+    plotted = _plotted_targets(margins)
+    if not any(len(p) for p in plotted):
+        return ""
+    width, height, left, right, top, bottom = 720, 300, 64, 16, 34, 46
+    count = max(reach.targets, 2)
+    values = np.concatenate([margins[p, j] for j, p in enumerate(plotted)])
+    low = min(0.0, float(np.min(values)), reach.margin.value if reach.margin is not None else 0.0)
+    high = max(float(np.max(values)), low + 1.0)
+    low, high = low - 0.04 * (high - low), high + 0.04 * (high - low)
+    scale_x = (width - left - right) / (count - 1)
+    scale_y = (height - top - bottom) / (high - low)
+
+    def x(target_number):
+        return left + (target_number - 1) * scale_x
+
+    def y(deg):
+        return height - bottom - (deg - low) * scale_y
+
+    out = [f'<svg width="{width}" height="{height}" role="img" aria-label="joint margins along the program" '
+           'font-family="sans-serif" font-size="11">']
+    out.append(f'<path d="M{left},{top}V{y(low):.1f}H{width - right}" fill="none" stroke="#222"/>')
+    for tick in _ticks(low, high):
+        out.append(f'<text x="{left - 4}" y="{y(tick) + 4:.1f}" text-anchor="end">{tick:g}</text>'
+                   f'<path d="M{left - 3},{y(tick):.1f}h3" stroke="#222"/>')
+    for tick in _ticks(1, count, whole=True):
+        out.append(f'<text x="{x(tick):.1f}" y="{y(low) + 14:.1f}" text-anchor="middle">{tick:g}</text>'
+                   f'<path d="M{x(tick):.1f},{y(low):.1f}v3" stroke="#222"/>')
+    out.append(f'<path d="M{left},{y(0):.1f}H{width - right}" stroke="#c62828" stroke-dasharray="5,3"/>'
+               f'<text x="{left + 4}" y="{y(0) - 4:.1f}" fill="#c62828">joint limit</text>')
+    # Data units inside: x the target number, y the margin in degrees (up), so the points are the values.
+    out.append(f'<g transform="matrix({scale_x:.6g} 0 0 {-scale_y:.6g} {left - scale_x:.6g} '
+               f'{height - bottom + low * scale_y:.6g})">')
+    for joint, targets in enumerate(plotted):
+        points = " ".join(f"{t + 1},{margins[t, joint]:.3f}" for t in targets)
+        out.append(f'<polyline data-joint="{_e(joint_name(robot, joint))}" points="{points}" fill="none" '
+                   f'stroke="{JOINT_COLOURS[joint]}" stroke-width="1.5" vector-effect="non-scaling-stroke"/>')
+    out.append("</g>")
+    for joint in range(6):
+        out.append(f'<rect x="{left + 8 + 70 * joint}" y="8" width="14" height="4" fill="{JOINT_COLOURS[joint]}"/>'
+                   f'<text x="{left + 26 + 70 * joint}" y="14">{_e(joint_name(robot, joint))}</text>')
+    if reach.margin is not None:
+        m = reach.margin
+        at = m.where.target + 1 - (0.5 if m.where.on_the_way else 0.0)
+        anchor = "end" if x(at) > width / 2 else "start"
+        shift = -8 if anchor == "end" else 8
+        out.append(f'<circle class="worst" cx="{x(at):.1f}" cy="{y(m.value):.1f}" r="4.5" fill="none" '
+                   f'stroke="#000" stroke-width="1.5"/><text x="{x(at) + shift:.1f}" y="{y(m.value) - 6:.1f}" '
+                   f'text-anchor="{anchor}">smallest: {_e(joint_name(robot, m.joint))} {m.value:.1f} deg '
+                   f'{_e(m.where.on())}</text>')
+    if reach.problem_at is not None:
+        at = reach.problem_at.target + 1 - (0.5 if reach.problem_at.on_the_way else 0.0)
+        anchor = "end" if x(at) > width / 2 else "start"
+        out.append(f'<path class="problem" d="M{x(at):.1f},{top}V{y(low):.1f}" stroke="#c62828" stroke-width="2"/>'
+                   f'<text x="{x(at) + (-4 if anchor == "end" else 4):.1f}" y="{top + 12}" text-anchor="{anchor}" '
+                   f'fill="#c62828">fails {_e(reach.problem_at.on())}</text>')
+    out.append(f'<text x="{(left + width - right) / 2:.0f}" y="{height - 6}" text-anchor="middle">robot target '
+               f'(in program order)</text><text transform="translate(14,{(top + height - bottom) / 2:.0f}) '
+               'rotate(-90)" text-anchor="middle">margin to the joint limit (deg)</text></svg>')
+    return "".join(out)
+
+
+def _ticks(low: float, high: float, whole: bool = False) -> list:
+    """About five round values between ``low`` and ``high`` (whole numbers only when ``whole``)."""
+    span = high - low
+    step = 10 ** math.floor(math.log10(span / 5)) if span > 0 else 1.0
+    for factor in (1, 2, 5, 10):
+        if span / (step * factor) <= 6:
+            step *= factor
+            break
+    if whole:
+        step = max(1.0, round(step))
+    first = math.ceil(low / step) * step
+    return [float(v) for v in np.arange(first, high + 1e-9 * step, step)]
+
+
+def _reach_html(robot, reach) -> str:
+    from .robots.reach import joint_name
+
+    if reach.reachable:
+        verdict = (f"{_e(robot.name)} ({_e(robot.id)}) follows the calibrated program, all {reach.targets} robot "
+                   "targets.")
+    else:
+        verdict = f"{_e(robot.name)} ({_e(robot.id)}) cannot follow the calibrated program: {_e(reach.reason)}."
+    rows = []
+    if reach.margin is not None:
+        m = reach.margin
+        rows.append(["smallest joint-limit margin" + ("" if reach.reachable else " (up to the failure)"),
+                     f"{m.value:.1f} deg", f"{_e(joint_name(robot, m.joint))} {_e(m.where.on())}"])
+    for name, extreme, unit, what in (("wrist", reach.wrist, "deg", "joint 5 from 0 or 180 deg"),
+                                      ("elbow", reach.elbow, "deg", "from stretched or folded"),
+                                      ("shoulder", reach.shoulder, "mm", "wrist point from axis 1")):
+        if extreme is not None:
+            rows.append([f"closest to the {name} singularity ({what})", f"{extreme.value:.1f} {unit}",
+                         _e(extreme.where.on())])
+    plot = joint_margins_svg(robot, reach)
+    note = ("<p class='note'>Each joint's distance to its nearer limit at every robot target of the program, in "
+            "the configuration the check solved; the dashed line is the limit, the circle the smallest margin "
+            "(which may lie on a linear move between two targets)"
+            + ("; longer programs show, per stretch of targets, the one nearest the limit" if reach.targets >
+               MAX_PLOTTED_TARGETS else "") + ".</p>")
+    return (f"<h2>Robot reach</h2><p>{verdict}</p>" + (_table(rows, ["", "value", "where"]) if rows else "")
+            + (plot + note if plot else "<p class='note'>The robot reaches none of the program's targets.</p>"))
 
 
 # A colour swatch in a legend line (its background the colour).

@@ -42,12 +42,17 @@ def within_limits(robot: Robot, joints_deg) -> np.ndarray:
         return np.all((joints >= robot.limits[:, 0]) & (joints <= robot.limits[:, 1]), axis=-1)
 
 
+def joint_margins_deg(robot: Robot, joints_deg) -> np.ndarray:
+    """(..., 6) each joint's distance in degrees to its nearer limit; negative outside its limits, NaN for
+    NaN joints."""
+    joints = np.asarray(joints_deg, dtype=float)
+    return np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
+
+
 def limit_margin_deg(robot: Robot, joints_deg) -> np.ndarray:
     """(...) smallest distance in degrees from any joint to its nearer limit; negative when a joint is
     outside its limits, NaN for NaN joints."""
-    joints = np.asarray(joints_deg, dtype=float)
-    margin = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
-    return np.min(margin, axis=-1)  # NaN propagates
+    return np.min(joint_margins_deg(robot, joints_deg), axis=-1)  # NaN propagates
 
 
 def turn_offsets(robot: Robot) -> np.ndarray:

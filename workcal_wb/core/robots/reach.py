@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .. import frames
-from .kinematics import inverse, wrap_into_limits
+from .kinematics import inverse, joint_margins_deg, wrap_into_limits
 from .model import Robot
 from .opw import model_angles
 
@@ -112,6 +112,17 @@ class Extreme:
 
 
 @dataclass(frozen=True)
+class PoseOnPath:
+    """The robot's joints at one place along the program: the controller's values in degrees, each joint
+    at the turn the program runs it at; ``past_limit``: a joint is past its limit there (a refused program's
+    problem)."""
+
+    where: Where
+    joints: tuple
+    past_limit: bool = False
+
+
+@dataclass(frozen=True)
 class ReachReport:
     """What ``check_reach`` found.  ``problem`` is None when the robot follows the whole program, else
     one of PROBLEMS, with ``reason`` in words and ``problem_at`` the first robot target it concerns.
@@ -119,7 +130,10 @@ class ReachReport:
     ``wrist`` (deg, joint 5 from 0 or 180), ``elbow`` (deg, the arm from stretched or folded),
     ``shoulder`` (mm, the wrist point from axis 1); ``near`` lists the singularities the path comes
     closer to than WRIST_NEAR_DEG, ELBOW_NEAR_DEG, SHOULDER_NEAR_MM.  ``joints`` (N, 6) and
-    ``branches`` (N,) are the solution at every target (NaN and -1 past a problem)."""
+    ``branches`` (N,) are the solution at every target (NaN and -1 past a problem).  ``margin_pose`` is the
+    robot where its margin is smallest; ``problem_pose`` where the problem shows: past its limit in the
+    configuration that goes furthest for a joint limit, else the last pose the robot follows before the
+    problem (None when it follows nothing)."""
 
     robot_id: str
     targets: int
@@ -139,6 +153,8 @@ class ReachReport:
     first_joints: tuple | None = None
     joints: np.ndarray = field(default=None, compare=False, repr=False)
     branches: np.ndarray = field(default=None, compare=False, repr=False)
+    margin_pose: PoseOnPath | None = None
+    problem_pose: PoseOnPath | None = None
 
     @property
     def reachable(self) -> bool:
@@ -364,12 +380,13 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
     target_joints[path.owner[target_rows]] = solutions[target_rows, branch[target_rows]]
     target_branch[path.owner[target_rows]] = branch[target_rows]
 
-    margin = wrist = elbow = shoulder = None
+    margin = wrist = elbow = shoulder = margin_pose = None
     near = []
     if stop:
         per_joint = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
         at = int(np.argmin(per_joint.min(axis=1)))
         margin = Extreme(float(per_joint[at].min()), path.where(at), int(np.argmin(per_joint[at])))
+        margin_pose = PoseOnPath(path.where(at), tuple(float(v) for v in joints[at]))
         wrist_deg, elbow_deg = singular_angles(robot, joints)
         shoulder_mm = shoulder_distance(robot, path.poses[:stop])
         for values, threshold, name in ((wrist_deg, WRIST_NEAR_DEG, WRIST_SINGULARITY),
@@ -388,16 +405,21 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
     runs = choice.branch_of_run
     changes = tuple(int(path.owner[path.starts[r]]) for r in range(1, len(runs))
                     if runs[r] >= 0 and runs[r - 1] >= 0 and runs[r] != runs[r - 1])
-    problem, reason, problem_at, problem_joint = None, "", None, None
+    problem, reason, problem_at, problem_joint, problem_pose = None, "", None, None, None
     if choice.failed_run is not None:
         problem, reason, problem_joint = _problem(robot, path, solutions, results, choice)
         problem_at = path.where(stop)
+        past_limit = solutions[stop, choice.best]
+        if results[choice.best].how[choice.failed_run] == _LIMIT and not np.isnan(past_limit).any():
+            problem_pose = PoseOnPath(problem_at, tuple(float(v) for v in past_limit), past_limit=True)
+        elif stop:
+            problem_pose = PoseOnPath(path.where(stop - 1), tuple(float(v) for v in joints[stop - 1]))
     unreachable = np.flatnonzero(path.at_target & np.isnan(solutions[:, :, 0]).all(axis=1))
     first_joints = tuple(float(v) for v in target_joints[0]) if target_branch[0] >= 0 else None
     return ReachReport(robot.id, count, len(path), problem, reason, problem_at, problem_joint,
                        path.where(int(unreachable[0])) if unreachable.size else None, margin, wrist, elbow, shoulder,
                        tuple(near), changes, int(target_branch[0]) if first_joints else None, first_joints,
-                       target_joints, target_branch)
+                       target_joints, target_branch, margin_pose, problem_pose)
 
 
 def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice):
@@ -530,3 +552,55 @@ def shoulder_distance(robot: Robot, flange_poses) -> np.ndarray:
     point = wrist_points(robot, flange_poses)
     side = robot.opw.b if robot.opw is not None else robot.ur.d4
     return np.sqrt(np.maximum(point[..., 0] ** 2 + point[..., 1] ** 2 - side ** 2, 0.0))
+
+
+# How a pose's title names the problem that comes right after the last pose the robot follows.
+PROBLEM_WORDS = {OUT_OF_REACH: "going out of reach", JOINT_LIMIT: "passing a joint limit",
+                 CONFIGURATION_CHANGE: "having to change configuration inside a linear move",
+                 WRIST_SINGULARITY: "passing the wrist singularity", ELBOW_SINGULARITY: "passing the elbow singularity",
+                 SHOULDER_SINGULARITY: "passing the shoulder singularity"}
+
+
+@dataclass(frozen=True)
+class WorstPose:
+    """The pose of a program to look at: ``joints`` (the controller's, degrees), ``where`` along the program,
+    and ``text``, where it is and why it is the one: 'at line 120 (A5 2.1 deg from its limit)'."""
+
+    joints: tuple
+    where: Where
+    text: str
+
+
+def worst_pose(robot: Robot, report: ReachReport) -> WorstPose | None:
+    """Where the robot comes nearest a joint limit along a program it follows, or where a program it cannot
+    follow fails (past the limit, or the last pose it follows before the problem); None when it follows
+    none of the program."""
+    if report.reachable:
+        if report.margin_pose is None:
+            return None
+        pose, margin = report.margin_pose, report.margin
+        return WorstPose(pose.joints, pose.where, f"{_place(pose.where)} ({joint_name(robot, margin.joint)} "
+                                                  f"{margin.value:.1f} deg from its limit)")
+    pose = report.problem_pose
+    if pose is None:
+        return None
+    if pose.past_limit:
+        margins = joint_margins_deg(robot, pose.joints)
+        joint = int(np.argmin(margins))
+        return WorstPose(pose.joints, pose.where, f"{_place(pose.where)} ({joint_name(robot, joint)} "
+                                                  f"{-margins[joint]:.1f} deg past its limit)")
+    problem = report.problem_at
+    there = "" if (problem.target, problem.on_the_way) == (pose.where.target, pose.where.on_the_way) \
+        else f" {_place(problem)}"
+    return WorstPose(pose.joints, pose.where, f"{_place(pose.where)}, just before "
+                                              f"{PROBLEM_WORDS[report.problem]}{there}")
+
+
+def _target(where: Where) -> str:
+    """'line 12', or 'robot target 5' when the source line is unknown."""
+    return f"line {where.line}" if where.line else f"robot target {where.target + 1}"
+
+
+def _place(where: Where) -> str:
+    """'at line 12', or 'on the way to line 12' for a point on the linear move to it."""
+    return ("on the way to " if where.on_the_way else "at ") + _target(where)

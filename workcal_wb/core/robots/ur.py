@@ -57,6 +57,22 @@ def forward(robot_or_params, joints_deg) -> np.ndarray:
     return pose.reshape(joints.shape[:-1] + (4, 4))
 
 
+def dh_frames(robot_or_params, joints_deg) -> np.ndarray:
+    """(..., 7, 4, 4) DH frames 0 (the base) to 6 (the flange) in the base frame, mm, for (..., 6) joints in
+    degrees: frame i is where joint i + 1 turns about its z (frame 6: the flange, ``forward``)."""
+    p = parameters_of(robot_or_params)
+    joints = np.asarray(joints_deg, dtype=float)
+    if joints.shape[-1:] != (6,):
+        raise ValueError(f"joints must have shape (..., 6), got {joints.shape}")
+    q = np.radians(joints)
+    a = (0.0, p.a2, p.a3, 0.0, 0.0, 0.0)
+    d = (p.d1, 0.0, 0.0, p.d4, p.d5, p.d6)
+    frames = [np.broadcast_to(np.eye(4), joints.shape[:-1] + (4, 4))]
+    for i in range(6):
+        frames.append(frames[-1] @ _dh(q[..., i], a[i], d[i], _ALPHA[i]))
+    return np.stack(frames, axis=-3)
+
+
 def inverse(robot_or_params, poses) -> np.ndarray:
     """(..., 8, 6) joints in degrees for (..., 4, 4) flange poses, NaN where a branch is unreachable."""
     return solved_in_chunks(_inverse_chunk, parameters_of(robot_or_params), poses)

@@ -3,7 +3,8 @@
 The toolpath is chosen once per document (the guide's toolpath step: a Path/CAM Job or operation, or
 a G-code file, remembered by ``fc.setup``) and used by both.  Both refuse a calibration whose status
 is not "ok" unless the user confirms forcing it (the result is then marked FORCED).
-``transform_toolpath`` and ``export_program`` are the recorded ``workcal_wb.fc.toolpath`` calls.
+``transform_toolpath`` and ``export_program`` are the recorded ``workcal_wb.fc.toolpath`` calls,
+``show_robot_at_worst_pose`` the recorded ``workcal_wb.fc.robot_pose`` call.
 """
 from __future__ import annotations
 
@@ -74,6 +75,14 @@ def export_program(calibration, path, fmt=None, force: bool = False, **options):
     check_export(calibration, os.fspath(path), fmt, force=force, **options)
     return replay.run("workcal_wb.fc.toolpath.export_program", calibration, os.fspath(path), fmt, force=force,
                       result="program", **options)
+
+
+def show_robot_at_worst_pose(calibration, fmt=None, force: bool = False, **options):
+    """The robot of a checked export drawn at the program's worst pose (recorded
+    ``fc.robot_pose.show_robot_at_worst_pose``, with the export's format, force and options).  Offered only
+    after a check that found a pose to show, so what it could refuse has been refused already."""
+    return replay.run("workcal_wb.fc.robot_pose.show_robot_at_worst_pose", calibration, fmt, force=force,
+                      result="robot_pose", **options)
 
 
 class TransformToolpathCommand(Command):

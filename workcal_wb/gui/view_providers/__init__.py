@@ -14,6 +14,7 @@ REGISTRY = {
     "WorkCal::PlacedModel": "workcal_wb.gui.view_providers.placed_model:ViewProviderPlacedModel",
     "WorkCal::DeviationMap": "workcal_wb.gui.view_providers.deviation_map:ViewProviderDeviationMap",
     "WorkCal::CalibratedPath": "workcal_wb.gui.view_providers.calibrated_path:ViewProviderCalibratedPath",
+    "WorkCal::RobotPose": "workcal_wb.gui.view_providers.robot_pose:ViewProviderRobotPose",
 }
 
 

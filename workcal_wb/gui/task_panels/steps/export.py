@@ -5,7 +5,9 @@ and ``--rotary``: a tilted W refused for a 3-axis machine is explained here in w
 ways out a click away (allow the tilt, or export for a 5-axis machine).  For a robot program, the
 robot that runs it and its TCP are the CLI's ``--robot`` and ``--tool``: the program is checked
 against the robot and carries the configuration solved (a program the robot cannot follow is
-refused with where to put the part instead, or written FORCED when the user says so).
+refused with where to put the part instead, or written FORCED when the user says so).  After a check
+against a robot the page says where the robot comes nearest a joint limit (or where it fails) and offers
+to show the robot at that pose beside the part; a robot shown is updated by the next export.
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ import FreeCAD
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.gui.task_panels import QtWidgets
 
-from .base import DONE, TODO, Step, button, combo, form_layout, label, row
+from .base import DONE, TODO, Scene, Step, button, combo, form_layout, label, row
 from .toolpath import robot_frame_scene
 
 translate = FreeCAD.Qt.translate
@@ -106,6 +108,13 @@ class ExportStep(Step):
         self.refusal.setVisible(False)
         self.written = label(name="WorkCalExported")
         layout.addWidget(self.written)
+        self.worst = label(name="WorkCalWorstPose")
+        self.show_robot_button = button(translate("WorkCal", "Show the robot at its worst pose"), translate(
+            "WorkCal", "Draw the robot in the robot base frame, beside the part, at the pose of the program nearest a "
+                       "joint limit (or where it fails)"), self.show_robot, "WorkCalShowRobot")
+        layout.addWidget(self.worst)
+        layout.addWidget(self.show_robot_button)
+        self.checked = None  # the last check against a robot: its report and what the export was given
         self.format.currentIndexChanged.connect(lambda index: self._format_changed())
         self.machine.currentIndexChanged.connect(lambda index: self._machine_changed())
         self.robot.currentIndexChanged.connect(lambda index: self._robot_changed())
@@ -161,6 +170,8 @@ class ExportStep(Step):
         chosen = bool(FORMATS[self.fmt()].CONTROLLERS) and self.robot.currentData() is not None
         for widget in (self.tcp, self.tcp_title):
             widget.setVisible(chosen)
+        self.checked = None  # what the page said of the robot's reach was said of another robot
+        self._show_check()
 
     def _machine_changed(self) -> None:
         for widget in (self.tilt, self.tilt_title):
@@ -254,15 +265,15 @@ class ExportStep(Step):
         tilted past what a 3-axis machine allows is explained on the page with its two ways out."""
         from workcal_wb.core.toolpath import ToolTilted
         from workcal_wb.core.toolpath.safety import PathOffModel
-        from workcal_wb.gui.commands.toolpath import export_program
         from workcal_wb.gui.task_panels.common import show_error, with_force
 
         calibration = self.guide.calibration()
         path = self.path.text().strip() or self.default_path()
         self.refusal.setVisible(False)
+        self.checked = None
         try:
-            job = with_force(lambda force: export_program(calibration, path, self.fmt(), force=force,
-                                                          **self.options()), confirm)
+            options = self.options()
+            job = with_force(lambda force: self._checked_export(calibration, path, force, options), confirm)
         except ToolTilted as exc:
             self.show_tilt(exc)
             return None
@@ -274,6 +285,13 @@ class ExportStep(Step):
         except WorkCalError as exc:
             show_error(translate("WorkCal", "Export robot program"), str(exc))
             return None
+        finally:
+            self._show_check()
+        if self.checked is not None and self.checked["pose"] is not None:
+            from workcal_wb.fc.robot_pose import find
+
+            if find(calibration) is not None:  # a robot shown: it follows the program just checked
+                self.show_robot()
         if job is not None:
             self.guide.exported = path
             self.written.setText(translate("WorkCal", "Written: {} ({} for the {})").format(
@@ -281,6 +299,59 @@ class ExportStep(Step):
             self.reveal(self.written)
         self.guide.refresh()
         return job
+
+    def _checked_export(self, calibration, path, force: bool, options: dict):
+        """The recorded export; the robot's reach it was checked against (a refusal's too) is kept for the
+        line on the worst pose and the button that shows the robot there."""
+        from workcal_wb.core.toolpath import ReachRefused
+        from workcal_wb.gui.commands.toolpath import export_program
+
+        try:
+            job = export_program(calibration, path, self.fmt(), force=force, **options)
+        except ReachRefused as refused:
+            self._keep_check(refused.report, force, options)
+            raise
+        if job is not None and job.reach is not None:
+            self._keep_check(job.reach, force, options)
+        return job
+
+    def _keep_check(self, report, force: bool, options: dict) -> None:
+        from workcal_wb.core.robots import load_robot
+        from workcal_wb.core.robots.reach import worst_pose
+
+        robot = load_robot(options["robot"])
+        self.checked = {"robot": robot, "report": report, "pose": worst_pose(robot, report), "fmt": self.fmt(),
+                        "force": force, "options": options}
+
+    def _show_check(self) -> None:
+        """The line on the last check's worst pose, and the button that shows the robot there."""
+        check = self.checked
+        if check is None:
+            self.worst.setText("")
+        elif check["pose"] is None:
+            self.worst.setText(translate("WorkCal", "{} reaches none of the program: there is no pose to show.").format(
+                check["robot"].name))
+        elif check["report"].reachable:
+            self.worst.setText(translate("WorkCal", "{} comes nearest a joint limit {}.").format(
+                check["robot"].name, check["pose"].text))
+        else:
+            self.worst.setText(translate("WorkCal", "{} cannot follow the program; the pose to look at: {}.").format(
+                check["robot"].name, check["pose"].text))
+        self.worst.setVisible(check is not None)
+        self.show_robot_button.setVisible(check is not None and check["pose"] is not None)
+
+    def show_robot(self):
+        """The robot of the last check drawn at its worst pose, beside the part (recorded)."""
+        from workcal_wb.gui.commands.toolpath import show_robot_at_worst_pose
+
+        check, calibration = self.checked, self.guide.calibration()
+        if check is None or check["pose"] is None or calibration is None:
+            return None
+        shown = self.run_guarded(translate("WorkCal", "Show the robot at its worst pose"),
+                                 lambda: show_robot_at_worst_pose(calibration, check["fmt"], force=check["force"],
+                                                                  **check["options"]))
+        self.guide.go(self.NAME)
+        return shown
 
     def show_tilt(self, refusal) -> None:
         needed = math.ceil(refusal.tilt_deg * 100) / 100
@@ -308,5 +379,20 @@ class ExportStep(Step):
         self.machine.setCurrentIndex(self.machine.findData("5axis-tcp"))
         return self.export()
 
-    def scene(self):
-        return robot_frame_scene(self)
+    def scene(self) -> Scene:
+        """The toolpath and the part in the robot frame (toolpath step), with the robot at its worst pose when
+        it is shown; fitted to all of them, so the robot is seen standing where it stands beside the part."""
+        from workcal_wb.fc.robot_pose import find
+
+        scene = robot_frame_scene(self)
+        calibration = self.guide.calibration()
+        robot = find(calibration) if calibration is not None else None
+        if robot is None:
+            return scene
+        label = (translate("WorkCal", "Robot at its worst pose"), robot)
+        if scene.fit:  # the calibrated toolpath and the placed part are shown: the robot joins them
+            return Scene(show=scene.show + [robot], fit=scene.fit + [robot], labels=scene.labels + [label],
+                         orientation="isometric")
+        reference = self.setup()["reference"]
+        return Scene(show=[robot] + ([reference] if reference is not None else []), labels=[label],
+                     orientation="isometric")
