@@ -2,20 +2,17 @@
 to rounding on every branch of every built-in robot, with independent solvers (py-opw-kinematics, FreeCAD's
 Robot6Axis, the ROS-Industrial URDF chain) and with the arms' published zero poses; limits and turns."""
 import dataclasses
-import glob
-import importlib.machinery
-import importlib.util
 import json
 import os
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from workcal_wb.core.benchmark.reach import py_opw_kinematics
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.robots import (builtin_robots, forward, inverse, limit_margin_deg, load_robot,
                                     turn_candidates, turn_offsets, within_limits, wrap_into_limits)
@@ -23,7 +20,6 @@ from workcal_wb.core.robots import opw, ur
 from workcal_wb.core.robots.model import LIBRARY, OpwParameters, xyzabc_transform
 from robot_files import ABB_IRB2400, FANUC_M10IA, write_robot
 
-ROOT = Path(__file__).resolve().parents[2]
 # A round trip reproduces a pose to this position (mm) and rotation (largest entry of the difference of the
 # two rotation matrices): rounding on arms a metre or two long is about 1e-12 mm.
 POSITION_TOL_MM = 1e-9
@@ -393,28 +389,12 @@ def test_kr6_matches_the_ros_industrial_urdf_chain():
 
 
 def _py_opw_kinematics():
-    """The Rust-backed solver's extension module: the package if it imports (it needs scipy >= 1.16 for
-    RigidTransform), else its compiled core (KinematicModel, Robot with forward/batch_forward/reach), which
-    needs nothing but numpy.  Looked for where `make test` puts it (build/test-peers/pyXY beside the checkout),
-    in build/peers, then on sys.path."""
-    try:
-        import py_opw_kinematics._internal as internal
-        return internal
-    except ImportError:
-        pass
-    tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
-    for folder in (ROOT / "build" / "test-peers" / tag, ROOT / "build" / "peers", *map(Path, sys.path)):
-        # Only a build for this interpreter (a wheel for another Python may load and then crash).
-        suffixes = [s for s in importlib.machinery.EXTENSION_SUFFIXES if s != ".so"]
-        found = [so for so in glob.glob(str(folder / "py_opw_kinematics" / "_internal*"))
-                 if any(so.endswith(s) for s in suffixes)]
-        if found:
-            loader = importlib.machinery.ExtensionFileLoader("py_opw_kinematics._internal", found[0])
-            spec = importlib.util.spec_from_file_location("py_opw_kinematics._internal", found[0], loader=loader)
-            module = importlib.util.module_from_spec(spec)
-            loader.exec_module(module)
-            return module
-    pytest.skip("py-opw-kinematics is not installed for this Python (make test-peers)")
+    """The Rust-backed solver's compiled core (KinematicModel, Robot with forward/batch_forward/reach), as the
+    benchmark finds it (build/test-peers/pyXY, where `make test` puts it), or a skip."""
+    module = py_opw_kinematics()
+    if module is None:
+        pytest.skip("py-opw-kinematics is not installed for this Python (make test-peers)")
+    return module
 
 
 OPW_ROBOTS = [robot_id for robot_id in builtin_robots() if load_robot(robot_id).kinematics == "opw"]

@@ -18,6 +18,7 @@ import pytest
 from program_checkers import check_fanuc, check_krl, check_rapid, check_urscript, comment_text
 from test_toolpath_exporters import expected
 from workcal_wb.core import frames
+from workcal_wb.core.benchmark.reach import trajectory
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.core.robots import builtin_robots, forward, inverse, load_robot, turn_candidates
@@ -102,18 +103,7 @@ def narrowed_kr16(folder, name, limits):
 
 def _trajectory(robot):
     """Joints (3001, 6) of a smooth path about a posture 60 % out in front, wrist clear of its singularity."""
-    if robot.opw is not None:
-        p = robot.opw
-        reach, height = p.a1 + p.c2 + np.hypot(p.a2, p.c3), p.c1
-    else:
-        reach, height = -robot.ur.a2 - robot.ur.a3, robot.ur.d1
-    model = frames.rigid(np.diag([1.0, -1.0, -1.0]), (0.6 * reach, 0.0, height))
-    solutions = inverse(robot, frames.invert(robot.base_transform) @ model @ robot.flange_transform)
-    centre = solutions[~np.isnan(solutions).any(axis=1)][0]
-    if abs(centre[4]) < 40:
-        centre[4] += 50 * np.sign(centre[4] or 1)
-    t = np.linspace(0, 1, 3001)[:, None]
-    return centre + np.array([20, 8, 8, 40, 15, 90]) * np.sin(2 * np.pi * t * np.array([1, 2, 3, 1, 2, 1]))
+    return trajectory(robot, 3001)
 
 
 @pytest.mark.parametrize("robot_id", builtin_robots())
