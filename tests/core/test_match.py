@@ -194,7 +194,7 @@ def test_bad_input_is_refused_with_the_cause(car):
         match(Cloud(np.empty((0, 3)), name="scan"), surface)
     with pytest.raises(InputError, match="NaN or infinite"):
         match(Cloud(np.full((100, 3), np.nan), name="scan"), surface)
-    with pytest.raises(InputError, match="planar"):
+    with pytest.raises(InputError, match="flat model: the model has its points on a plane"):
         match(Cloud(points), Cloud(np.column_stack([points[:, :2], np.zeros(len(points))]), name="flat model"))
     with pytest.raises(InputError, match="unknown match method"):
         match(Cloud(points), surface, method="magic")
