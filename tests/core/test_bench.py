@@ -204,7 +204,7 @@ def test_peers_read_the_files_workcal_writes(tmp_path):
 def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set, monkeypatch):
     """Dragon stand scan 144 against the other 14 (verdicts table, seed 0): on Debian 12's stack the
     first feature search's best leaves the model 2 mm and more off the scan; the match searches once
-    more and finds the right pose, "ok" (issue 17).  Whether the first search misses depends on the
+    more and finds the right pose, "ok".  Whether the first search misses depends on the
     libraries' rounding (on Debian 13's it finds the pose at once), so a first search made to miss
     (its poses turned and moved off) shows the second one on every stack."""
     from workcal_wb.core import match as match_module

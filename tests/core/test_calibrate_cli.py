@@ -38,7 +38,7 @@ def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path
     original = read_gcode(folder / "toolpath.nc").points()
     calibrated = read_gcode(tmp_path / "toolpath_calibrated.nc").points()
     assert np.abs(calibrated - frames.apply(W, original)).max() < 1e-3  # written to 4 decimals
-    # the program names its result and shows the bound result.json holds (issue 14.3)
+    # the program names its result and shows the bound result.json holds
     program = (tmp_path / "toolpath_calibrated.nc").read_text()
     digest = hashlib.sha256((tmp_path / "result.json").read_bytes()).hexdigest()[:16]
     assert f"result sha256 {digest}" in program

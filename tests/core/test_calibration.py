@@ -83,7 +83,7 @@ def test_uncertainty_bounds_the_true_error_at_the_toolpath(car):
 
 
 def test_the_matches_that_located_the_objects_are_the_final_ones(car):
-    """Issue 15: a calibration searched each object, matched each region again from that pose, and
+    """A calibration searched each object, matched each region again from that pose, and
     made every bootstrap refit a whole match with its verdict (16 matches).  The located matches are
     kept (made on the same points) and the refits refine the pose alone: one global search per object."""
     _, _, _, result = car
@@ -92,7 +92,7 @@ def test_the_matches_that_located_the_objects_are_the_final_ones(car):
 
 
 def test_the_workpiece_is_searched_while_the_reference_is_and_found_alike(car, user_regions, monkeypatch):
-    """Issue 15 (calibrate in 0.3 s): the two objects' searches ran one after the other on one
+    """The two objects' searches ran one after the other on one
     core.  The workpiece's likeliest cluster is now searched on a second thread while the reference
     is looked for; the regions and poses are those found one search after the other."""
     _, scan, _, result = car
@@ -106,7 +106,7 @@ def test_the_workpiece_is_searched_while_the_reference_is_and_found_alike(car, u
 
 
 def test_a_paper_method_is_the_method_of_both_final_matches(plain):
-    """Review of issue 15: the located match (robust, as regions are found) was kept as the final one
+    """The located match (robust, as regions are found) was kept as the final one
     whatever method the user chose, so an icp calibration reported robust matches."""
     scene, scan = plain
     result = calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(),

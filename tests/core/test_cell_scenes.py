@@ -1,4 +1,4 @@
-"""Scenes as a real cell gives them (issue 11): any export frame, touching and clay-bridged objects,
+"""Scenes as a real cell gives them: any export frame, touching and clay-bridged objects,
 views where a rival pose of the reference fits as well as the right one.  Each scene is simulated by
 simulate.cell with exact truth; every calibration uses automatic regions."""
 import numpy as np
@@ -144,7 +144,7 @@ def test_rivals_past_max_ruled_out_leave_the_tie_standing_though_all_sink(monkey
 
 
 def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_over():
-    """Found at stop 34: seen low from its outer side, the L-block calibrated "ok" with V 180 deg off
+    """Seen low from its outer side, the L-block calibrated "ok" with V 180 deg off
     (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC
     hypothesis ranked 4th to 11th by its rough score among wrong turns and was never refined, and the
     platform ruled out the three rivals listed.  Rough poses are now taken a few steps first (match.
@@ -287,7 +287,7 @@ def _distorted(cell, strain: np.ndarray, seed: int):
     (3, np.diag([0, 0, 0.003])),  # depth stretched 0.3 %
 ], ids=["larger", "smaller", "sheared", "deeper"])
 def test_a_scan_distorted_by_its_scanner_fails_and_says_so(seed, strain):
-    """Found by a tester (stop 32): a scanner whose calibration is 0.2-0.5 % off gave "ok" with W 0.4-1.5 mm
+    """A scanner whose calibration is 0.2-0.5 % off gave "ok" with W 0.4-1.5 mm
     off, because each object still fits its model within the tolerance, each placed about its own region,
     and W joins the two.  The scan's strain is measured (on the reference, and on both objects where the
     reference cannot show it), and how far it moves W."""
@@ -369,8 +369,8 @@ def test_a_strain_the_reference_does_not_confirm_is_a_warning_not_a_refusal(bunn
 
 
 def test_an_undistorted_noisy_low_view_is_not_refused_for_distortion():
-    """Found by random scenes varying what the scenes benchmark keeps fixed (noise, view, stray points;
-    stop 35): an undistorted car scene at 0.2 mm noise, the L-block seen low (25 deg), read a -0.16 %
+    """Found by random scenes varying what the scenes benchmark keeps fixed (noise, view, stray points):
+    an undistorted car scene at 0.2 mm noise, the L-block seen low (25 deg), read a -0.16 %
     scale and a 0.32 % strain that no scanner made and "moved" W 0.70 mm, so the calibration failed
     with W right to 0.003 deg.  The check measured each point against its nearest sample's tangent
     plane, another face's near the block's edges, where noise along grazing rays puts points past the

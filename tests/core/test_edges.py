@@ -101,7 +101,7 @@ def test_slide_is_a_rigid_motion_of_the_asked_size():
 def plate_views():
     """{name: (scan points, true U, surface)}: verdict-table views (seed 0) of plates seen on one face
     and one side, whose slide along the side only the face's outline stops, and of a curved tile
-    whose search finds only a flipped pose (issue 17)."""
+    whose search finds only a flipped pose."""
     from workcal_wb.core.benchmark.verdicts import simulated_cases
 
     wanted = ("notched plate #4", "near-square plate #2", "near-square plate #5", "curved tile #7")

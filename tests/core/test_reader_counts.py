@@ -185,7 +185,7 @@ def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
     (tmp_path / "long.ply").write_bytes(data + b"\0" * 48)
     with pytest.raises(InputError, match="data continues after the 60000 vertices"):
         readers.read_cloud(tmp_path / "long.ply", max_points=10000)
-    # The scanner's position a PLY states (issue 11) survives the thinning, in mm as the points.
+    # The scanner's position a PLY states survives the thinning, in mm as the points.
     (tmp_path / "seen.ply").write_bytes(data.replace(b"comment written by WorkCal", b"comment viewpoint 1 2 3", 1))
     seen = readers.read_cloud(tmp_path / "seen.ply", units="cm", max_points=10000)
     assert np.array_equal(seen.sensors, [[10.0, 20.0, 30.0]]) and len(seen) < 60000

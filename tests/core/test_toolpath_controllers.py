@@ -1,4 +1,4 @@
-"""Programs a controller loads as written (issue 13): each language's rules checked by a strict checker,
+"""Programs a controller loads as written: each language's rules checked by a strict checker,
 a corpus of CAM files in the shapes real posts write, the G-code reader's findings and the safety bounds."""
 import hashlib
 import math

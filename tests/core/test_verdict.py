@@ -146,7 +146,7 @@ def test_noise_above_the_tolerance_is_said_in_one_sentence(workpiece, seed):
 @pytest.fixture(scope="module")
 def verdict_views():
     """{name: (scan points, true U, surface)}: views of the verdicts table (seed 0) whose right pose
-    was reported "ambiguous" (issue 17) or whose search finds a flipped pose first."""
+    was reported "ambiguous" or whose search finds a flipped pose first."""
     from workcal_wb.core.benchmark.verdicts import simulated_cases
 
     wanted = ("notched plate #4,", "curved tile #4,", "rebated plate #1,", "rebated plate #6,")
@@ -160,7 +160,7 @@ def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name, monkeypa
     """The half turn puts all but a few tens of the scan's points on the part, and the view's cells
     barely tell it from the right pose.  Never a wrong "ok" (on the same views simulated by ray casting,
     open3d 0.19, the search never proposed the notched plate's right pose and a flip came back "ok"),
-    and the right pose is "ok" (issue 17: both came back ambiguous): the verdict tries the turns of its
+    and the right pose is "ok" (both came back ambiguous): the verdict tries the turns of its
     best refined exactly like it, and such a flip, nearly as good by the view's cells, leaves tens of
     scan points ten noises and more off the part where the right pose leaves none: listed, not a rival.
     The rebated plate's flip leaves only ten points off (its search's best was the flip): on the
@@ -295,8 +295,8 @@ def test_a_scale_error_does_not_make_a_wrong_pose_ok():
     turn, or seen from its other side, explains the view about as well); with it, a pose 90 deg from
     the truth was reported "ok": it lays the plate's long side face on the model's short one, and the
     64 scan points that run on past that face's end (15 %) were taken for clutter.  Found by a tester
-    varying the sensor; the scan is stored, so the test does not depend on the simulator.  On Debian 13
-    since stop 34 (match.PRE_REFINED) the flip is chosen, "ambiguous" with the truth listed as its rival."""
+    varying the sensor; the scan is stored, so the test does not depend on the simulator.  On Debian 13,
+    with rough poses refined a few steps first (match.PRE_REFINED), the flip is chosen, "ambiguous" with the truth listed as its rival."""
     from workcal_wb.core.benchmark.verdicts import right
 
     data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / "plate-scaled-1pc.npz")
@@ -413,7 +413,7 @@ def test_a_part_on_a_table_is_not_ok_upside_down(name, model, motion_seed, seed)
     """A part standing on a table that reaches past it, its bottom face in the table's plane, matched in
     the whole scene (no regions, no viewpoint), in the scan's frame and moved to another: with Debian
     12's numpy and scipy the L-block was "ok" half a turn from the truth in both (seeds 0 and 1), turned
-    about the vertical, its foot on open table.  Measured (stop 32): the table
+    about the vertical, its foot on open table.  Measured: the table
     points under that foot lay on the model's bottom face, whose normals face into the table, so the
     viewpoint estimated from the matched normals came out grazing, 0.2 deg above the table, from where
     the top face does not face the sensor and its 401 scan points past the placed top were not weighed
@@ -421,7 +421,7 @@ def test_a_part_on_a_table_is_not_ok_upside_down(name, model, motion_seed, seed)
     (Judge._choose_view), and that pose is "ambiguous" (the top face runs on past its edge).  Neither
     search here finds the right pose (the search of a part on a table in the whole scene: `calibrate`
     takes the platform away first).  The plate's half turn was "ok" until a pose reaching through the
-    table stopped being "ok" (stop 28); that plane is fitted to every scan point within a coarse voxel
+    table stopped being "ok"; that plane is fitted to every scan point within a coarse voxel
     of it, the plate's own lower side points among them, which tilt it 0.6 deg, so that catch is fragile.
     Found by a tester (helper) checking the face-continuation test; the scans are stored."""
     from workcal_wb.core.benchmark.verdicts import right
@@ -487,8 +487,8 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
     """Scans testers (helpers) made of shells, each moved to stand on z = 0, matched with seeds 0-2.  On a
     slab, each came back "ok" for some seed, slid along its bend, its curved faces fitting where they
     overlap the scan; each such pose sinks an end into the slab, and a pose reaching more than 3
-    tolerances through the plane the scan stands on is no longer "ok" (stop 28):
-    - ``shapes.shell()`` on a slab 60 mm wider, 25 deg above, exact (stop 27): "ok" with seed 0 on Debian
+    tolerances through the plane the scan stands on is no longer "ok":
+    - ``shapes.shell()`` on a slab 60 mm wider, 25 deg above, exact: "ok" with seed 0 on Debian
       12, turned 2.0 deg about its bend and shifted 3.1 mm (4.0 mm at its farthest point).  The right
       pose was found, refined again from a wider gate (Judge.rank), and the slab beside the shell's feet
       pulled it along its bend, its curved faces still fitting to 0.2 um; it sinks an end 2.1 mm;
@@ -500,7 +500,7 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
       noise: "ok" 0.65 deg and 1.2 mm off, every seed (1.3 mm into the slab).
     Alone (nothing to sink into):
     - a 2 mm shell bent at 90 mm, 0.1 mm noise, 54 deg above: "ok" 0.59 deg and 2.9 mm off with seed 2 on
-      Debian 12, the scan laid on the wall's other face (measured, stop 32).  Its surface spreads 5.07 %
+      Debian 12, the scan laid on the wall's other face (measured).  Its surface spreads 5.07 %
       of its diagonal across its thinnest axis, just over the 5 % that made a part thin, so the pose laid
       through the wall was never tried; tried (a part is thin by its wall's thickness across that axis,
       SurfaceModel.wall_across: 1.2 % of its diagonal), it fits at 0.95 noises against the best's 1.95,
@@ -508,8 +508,7 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
       as a rival seen from the other side, it makes the match "ambiguous";
     - a shell 200 x 60 mm bent at 150 mm, exact, 50 deg above: "ok" turned over (179.9 deg) with seed 1
       on Debian 12, at 0.24 mm RMS (the scan's noise 0.001 mm); the right pose was not among the
-      candidates (the nearest, a turn of the best, 4.3 deg off; a match from it goes home).  A known
-      defect from stop 28 to 34; since rough poses are taken a few steps before the best are chosen
+      candidates (the nearest, a turn of the best, 4.3 deg off; a match from it goes home).  Since rough poses are taken a few steps before the best are chosen
       (match.PRE_REFINED), the right pose is listed as a rival and the match is "ambiguous".
     The tester's scans are in a random frame.  A rule tried in Judge.rank first (a widened pose taken only
     when it keeps as much of the scan on the model) mended the 25 deg shell, but over the tester's 234
@@ -529,7 +528,7 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
 def test_a_shell_moved_to_another_frame_is_not_ok_on_its_other_face(case, model, motion_seed):
     """The shells scanned alone, moved to another frame and matched with seed 2: both came back "ok",
     the thin one 0.6 deg and 2.9 mm off with its scan laid on the wall's other face, the long one turned
-    over (Debian 12's numpy and scipy, stop 32).  Since a part is thin by its wall across (see
+    over (Debian 12's numpy and scipy).  Since a part is thin by its wall across (see
     test_a_part_is_thin_by_its_wall_however_far_it_bends), the pose laid through the wall is tried and
     kept as a rival seen from the other side: both "ambiguous"."""
     from workcal_wb.core.benchmark.verdicts import right
@@ -561,7 +560,7 @@ def test_a_part_is_thin_by_its_wall_however_far_it_bends(name, model, wall_mm):
     """A plate or shell may be scanned on one face and laid on the other, so the verdict tries that
     pose (match._through_the_wall) on thin parts only.  Thin used to mean a surface spread less than
     5 % of the diagonal across its thinnest axis: the two shells bent furthest spread 5.07 and 5.03 %
-    and were left out (stop 32: the 2 mm one came back "ok" laid on its other face).  Their wall across
+    and were left out (the 2 mm one came back "ok" laid on its other face).  Their wall across
     that axis is their thickness; a body's is its depth, 10 % of its diagonal or more."""
     from workcal_wb.core.match import THIN_PART
 

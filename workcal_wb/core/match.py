@@ -92,9 +92,8 @@ MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
 CANDIDATE_FLOOR = 0.7
 # The best this many of them by that check are first taken QUICK_ITERATIONS steps towards the scan and
 # checked again, and the best ``MatchOptions.candidates`` of those are refined in full: a rough pose's
-# score says little of where it settles.  Found (stop 34): an L-block seen low from its outer side, its
-# right pose's hypothesis 4th to 11th among some 20 wrong turns, never refined; after the quick steps it
-# came first in each of 8 seeds.
+# score says little of where it settles (an L-block seen low from its outer side ranks its right pose
+# behind many wrong turns until each has taken a few steps).
 PRE_REFINED, QUICK_ITERATIONS = 12, 10
 # Two hypotheses are one pose unless they differ by more than this turn (deg) or this share of the model
 # diagonal at the scan's centre; refined poses, by the finer pair.

@@ -33,10 +33,8 @@ ERODE_PIXELS = {"known": 1, "estimated": 3}
 # Scan points this far behind the placed surface (mm, and at least DEPTH_PIXELS pixels) were seen through it.
 DEPTH_MARGIN_MM, DEPTH_PIXELS = 5.0, 2.0
 # A tie is broken by the constraints only when the search listed at most this many rivals: a view the part fits
-# in more ways is one whose list of them is a sample, not all of them.  Found (stop 34): an L-block seen low from
-# its outer side; rivals turned 90 and 120 deg (three) sank through the platform, the right pose, half round
-# from the search's best, was never listed, and "ok" came back with V 180 deg off (the 60 bench scenes rule out
-# no rival at all).
+# in more ways is one whose list of them is a sample, not all of them: ruling out the listed few may leave
+# standing a pose the search never listed.
 MAX_RULED_OUT = 2
 # A rival breaks free space when it contradicts at least this many more view pixels than the best,
 # and this share of its own interior more.

@@ -32,7 +32,7 @@ WARM, COLD = "WorkCal warm", "WorkCal cold"
 STOCK, KISS = "Open3D stock", "KISS-Matcher + small_gicp"
 IN_PROCESS = "WorkCal in-process (kept models)"
 PEER_NAMES = {STOCK: "open3d", KISS: "kiss"}
-# Targets (issue 15): warm match at most this fraction of the faster peer's median time (with at
+# Targets: warm match at most this fraction of the faster peer's median time (with at
 # least its success rate); warm calibrate of the demo scene under these seconds as a process and
 # in-process; no WorkCal match process above stock Open3D's peak memory on the same files.
 MATCH_RATIO_TARGET = 0.4
@@ -280,7 +280,7 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
     if stock and ours > stock["max_peak"]:
         missed.append(f"whole processes: WorkCal match peak memory {ours:.0f} MB above stock Open3D's "
                       f"{stock['max_peak']:.0f} MB on the same files")
-    lines += ["", "Targets (issue 15): warm `match` at most "
+    lines += ["", "Targets: warm `match` at most "
               f"{MATCH_RATIO_TARGET} x the faster peer's median time with at least its success rate; warm `calibrate` "
               f"of the demo scene under {CALIBRATE_PROCESS_S} s as a process and under {CALIBRATE_IN_PROCESS_S} s "
               "in-process; no WorkCal `match` process above stock Open3D's peak memory on the same files. "

@@ -31,9 +31,8 @@ from .scenes import HEADING as SCENES_HEADING, UPRIGHT_L_HEADING
 WORKCAL, STOCK = "WorkCal", "Open3D stock"
 METHODS = (WORKCAL, STOCK)
 SUCCESS_DEG, SUCCESS_MM = 1.0, 1.0
-# Targets (issue 3): WorkCal's median time at most this fraction of stock's on the bunny scans;
-# simulated car scans within these errors (medians).  Issue 15: WorkCal's peak memory over the cases no
-# higher than stock's.
+# Targets: WorkCal's median time at most this fraction of stock's on the bunny scans; simulated car
+# scans within these errors (medians); WorkCal's peak memory over the cases no higher than stock's.
 TIME_RATIO_TARGET = 0.5
 SIMULATED_TARGET = (0.01, 0.02)  # deg, mm
 

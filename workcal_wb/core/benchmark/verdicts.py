@@ -9,7 +9,7 @@ alone from views, distances, placements and noise drawn from the seed, and a few
 Every scan is moved into a frame of its own.  A pose is right when it lays the model onto itself
 within RIGHT_MM where the truth does (so a symmetric part's pose is right up to its symmetry).
 
-The goals (issue 17): no wrong pose reported "ok", and every right pose of a part without symmetry
+The goals: no wrong pose reported "ok", and every right pose of a part without symmetry
 reported "ok" when the tolerance is above the scan's noise.
 """
 from __future__ import annotations

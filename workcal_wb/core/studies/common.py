@@ -35,7 +35,7 @@ QUICK_IMAGE = (368, 276)
 QUICK_RESAMPLES = 2
 # Points on the model surface where the displacement of W is measured (the "surface" error).
 SURFACE_SAMPLES = 2000
-# The targets of issue 4, for simulated scenes (0.1 mm noise, 25 cm part, 5 scanner positions).
+# The studies' targets for simulated scenes (0.1 mm noise, 25 cm part, 5 scanner positions).
 TARGET_ROTATION_DEG = 0.02
 TARGET_TRANSLATION_MM = 0.05
 TARGET_OMEGA_SPREAD_DEG = 0.02
