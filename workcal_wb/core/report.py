@@ -310,6 +310,13 @@ def histogram_svg(deviations, scale: DeviationScale) -> str:
     return "".join(out)
 
 
+def _figure(png: bytes, alt: str, caption: str) -> str:
+    """A PNG view inline, side by side with the next, with its caption (both texts escaped here)."""
+    return (f"<figure style='display:inline-block;margin:.4em 1em .4em 0'><img alt=\"{_e(alt)}\" "
+            f"src=\"data:image/png;base64,{base64.b64encode(png).decode('ascii')}\">"
+            f"<figcaption class='note'>{_e(caption)}</figcaption></figure>")
+
+
 def _rgb(colour) -> str:
     return "rgb({},{},{})".format(*picture.to_bytes(colour))
 
@@ -601,11 +608,9 @@ def _regions_html(calibration: CalibrationResult, images) -> str:
         return ""
     out = "<h2>Regions</h2><ul>" + "".join(f"<li>{_e(s)}</li>" for s in sentences) + "</ul>"
     for view in images.get("regions", ()):
-        out += (f"<figure style='display:inline-block;margin:.4em 1em .4em 0'><img alt=\"regions and the points off "
-                f"their models, {_e(view['title'])}\" src=\"data:image/png;base64,"
-                f"{base64.b64encode(view['png']).decode('ascii')}\"><figcaption class='note'>{_e(view['title'])} of "
-                f"both regions, from the scanner's side; the bar at the lower left is {view['scale_bar_mm']:g} mm"
-                "</figcaption></figure>")
+        out += _figure(view["png"], f"regions and the points off their models, {view['title']}",
+                       f"{view['title']} of both regions, from the scanner's side; the bar at the lower left is "
+                       f"{view['scale_bar_mm']:g} mm")
     if images.get("regions"):
         count = sum(calibration.off_model(role)["count"] for role in ("workpiece", "reference")
                     if calibration.off_model(role) is not None)
@@ -704,11 +709,9 @@ def _deviation_html(deviation, images, asked: bool) -> str:
            "near them. FreeCAD's deviation map uses the same colours.</p>"
            + _table(rows))
     for view in images.get("views", ()):
-        out += (f"<figure style='display:inline-block;margin:.4em 1em .4em 0'><img alt=\"deviation colour map, "
-                f"{_e(view['title'])}\" src=\"data:image/png;base64,{base64.b64encode(view['png']).decode('ascii')}\">"
-                f"<figcaption class='note'>{_e(view['title'])}: principal axis {view['horizontal']} of X-A to the "
-                f"right, axis {view['vertical']} up; the bar at the lower left is {view['scale_bar_mm']:g} mm"
-                "</figcaption></figure>")
+        out += _figure(view["png"], f"deviation colour map, {view['title']}",
+                       f"{view['title']}: principal axis {view['horizontal']} of X-A to the right, axis "
+                       f"{view['vertical']} up; the bar at the lower left is {view['scale_bar_mm']:g} mm")
     out += images.get("legend", "") + images.get("histogram", "")
     return out
 

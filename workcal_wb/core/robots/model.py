@@ -120,6 +120,21 @@ class Robot:
         return _read_only(xyzabc_transform(self.flange))
 
 
+def parameters_of(robot_or_params, kind: type):
+    """``robot_or_params`` as ``kind`` (OpwParameters or UrParameters): a Robot's own, or the parameters given."""
+    if isinstance(robot_or_params, Robot):
+        if not isinstance(robot_or_params.parameters, kind):
+            raise ValueError(f"robot {robot_or_params.id} has {robot_or_params.kinematics} kinematics, not "
+                             f"{_KIND_NAMES[kind]}")
+        return robot_or_params.parameters
+    if isinstance(robot_or_params, kind):
+        return robot_or_params
+    raise TypeError(f"expected a Robot or {kind.__name__}, got {type(robot_or_params).__name__}")
+
+
+_KIND_NAMES = {OpwParameters: "OPW", UrParameters: "UR"}
+
+
 def xyzabc_transform(xyzabc) -> np.ndarray:
     """4x4 transform of x, y, z (mm) and A, B, C (degrees), R = Rz(A) Ry(B) Rx(C)."""
     x, y, z, a, b, c = (float(v) for v in xyzabc)

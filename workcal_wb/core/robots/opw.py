@@ -36,7 +36,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import OpwParameters, Robot
+from . import model
+from .model import OpwParameters
 
 # Below this sin(theta5) the wrist counts as singular and joint 4 is set to its model zero: the pose
 # error that choice makes is at most pi * sin(theta5) rad, under 1e-11 rad.
@@ -49,13 +50,7 @@ CHUNK = 1 << 17
 
 
 def parameters_of(robot_or_params) -> OpwParameters:
-    if isinstance(robot_or_params, Robot):
-        if robot_or_params.opw is None:
-            raise ValueError(f"robot {robot_or_params.id} has {robot_or_params.kinematics} kinematics, not OPW")
-        return robot_or_params.opw
-    if isinstance(robot_or_params, OpwParameters):
-        return robot_or_params
-    raise TypeError(f"expected a Robot or OpwParameters, got {type(robot_or_params).__name__}")
+    return model.parameters_of(robot_or_params, OpwParameters)
 
 
 def model_joints(params: OpwParameters, joints_deg) -> np.ndarray:

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import Robot, UrParameters
+from . import model
+from .model import UrParameters
 from .opw import WRIST_SINGULAR_SIN, arccos_within_rounding, solved_in_chunks, wrap_degrees
 
 # The DH twists of every UR arm (the e-Series and CB3 tables differ only in lengths).
@@ -33,13 +34,7 @@ _ALPHA = np.radians([90.0, 0.0, 0.0, 90.0, -90.0, 0.0])
 
 
 def parameters_of(robot_or_params) -> UrParameters:
-    if isinstance(robot_or_params, Robot):
-        if robot_or_params.ur is None:
-            raise ValueError(f"robot {robot_or_params.id} has {robot_or_params.kinematics} kinematics, not UR")
-        return robot_or_params.ur
-    if isinstance(robot_or_params, UrParameters):
-        return robot_or_params
-    raise TypeError(f"expected a Robot or UrParameters, got {type(robot_or_params).__name__}")
+    return model.parameters_of(robot_or_params, UrParameters)
 
 
 def forward(robot_or_params, joints_deg) -> np.ndarray:
