@@ -1,8 +1,10 @@
-"""Rules the source must keep that no test on our FreeCADs could catch: FreeCAD 1.1's Qt6 builds.
+"""Rules the source must keep that a run seldom catches.
 
 FreeCAD 0.20 and 1.0 (the versions CI runs) wrap PySide2; 1.1 is built on Qt6/PySide6, where these
-Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.
+Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.  And a module
+never binds again a name it imports (a tuning constant named like a reason code replaced the code).
 """
+import ast
 import re
 from pathlib import Path
 
@@ -24,3 +26,30 @@ def test_no_qt5_only_idioms(pattern):
     found = [f"{path.relative_to(ROOT)}:{n}" for path in SOURCES
              for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if re.search(pattern, line)]
     assert not found, f"{QT6_BREAKERS[pattern]}: {', '.join(found)}"
+
+
+def rebound_imports(source: str) -> list:
+    """(line, name) of each module-level assignment to a name the module imports at module level."""
+    tree = ast.parse(source)
+    imported = {alias.asname or alias.name.split(".")[0] for node in tree.body
+                if isinstance(node, (ast.Import, ast.ImportFrom)) for alias in node.names}
+    found = []
+    for node in tree.body:
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(
+            node, (ast.AnnAssign, ast.AugAssign)) else []
+        for target in targets:
+            for name in ast.walk(target):
+                if isinstance(name, ast.Name) and name.id in imported:
+                    found.append((node.lineno, name.id))
+    return found
+
+
+def test_no_module_binds_again_a_name_it_imports():
+    found = [f"{path.relative_to(ROOT)}:{line} {name}" for path in SOURCES
+             for line, name in rebound_imports(path.read_text(encoding="utf-8"))]
+    assert not found, "a module-level assignment replaces an imported name: " + ", ".join(found)
+
+
+def test_the_rebinding_check_sees_a_constant_named_like_an_imported_code():
+    source = "from .result import THIN_WALL, RIVAL\nTHIN_PART, THIN_WALL = 0.08, 0.25\nOTHER = 1\n"
+    assert rebound_imports(source) == [(2, "THIN_WALL")]

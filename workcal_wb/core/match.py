@@ -207,8 +207,8 @@ CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS, CONTINUED_SAMPLES = 0.1
 # (SurfaceModel.wall_across) is thinner than THIN_PART of its diagonal (shells and plates measured
 # 0.012-0.07, the car, the bunny and blocks 0.10 and more; the spread of its surface across its thinnest
 # axis, tried first, left out shells bent more than 5 % of their diagonal); the wall behind a scan is
-# then measured where it lies, and is a wall up to THIN_WALL.
-THIN_PART, THIN_WALL = 0.08, 0.25
+# then measured where it lies, and is a wall up to THIN_WALL_DIAGONALS.
+THIN_PART, THIN_WALL_DIAGONALS = 0.08, 0.25
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
 THIN_WALL_NOISES = 5.0
@@ -617,7 +617,7 @@ def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: fl
     pixels, _ = view.pixels(patch)
     seen = visibility.median_wall_thickness(view, surface.points[samples], surface.normals[samples],
                                             pixels[pixels >= 0], MIN_SCAN_POINTS)
-    if not seen < THIN_WALL * surface.diagonal:
+    if not seen < THIN_WALL_DIAGONALS * surface.diagonal:
         return []
     shifted = frames.rigid(translation=-seen * normal) @ state.T
     scores = inlier_scores(medium[:TURN_POINTS], surface, [state.T, shifted], state.gate)
