@@ -289,6 +289,12 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         gate = voxel  # a guess may be off by a few millimetres
 
     pointops.hand_back_freed_heap()  # the global search's temporaries: refinement's would pile on them
+    sample, noise_points = fine[:VERDICT_POINTS], medium[probes]
+    support = (Support.given(sample, *options.support) if options.support is not None
+               else Support.of(sample, voxel, surface.diagonal, options.seed))
+    # The fits see the part, not what it stands on: the support's points by its foot would pull it
+    # along the plane or tilt it.  The verdict weighs the whole scan, the support included.
+    fine, medium = _off_support(fine, support), _off_support(medium, support)
     turned = {}  # pose (its bytes) -> its turns refined (_near_symmetric_turns): the verdict asks again for the best's
 
     def turns_of(state):
@@ -300,13 +306,10 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     with timer("refine"):
         best, rivals = _refine(options.method, starts, medium, fine, surface, gate, options.tolerance_mm, hopeless,
                                turns_of)
-    sample = fine[:VERDICT_POINTS]
-    support = (Support.given(sample, *options.support) if options.support is not None
-               else Support.of(sample, voxel, surface.diagonal, options.seed))
 
     def judged(best, rivals):
         """(Judge, best, its ranking) of a best pose and its rivals (see Judge.rank)."""
-        judge = Judge(sample, surface, (medium[probes], probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
+        judge = Judge(sample, surface, (noise_points, probe_noise), spacing * np.sqrt(len(scan) / len(sample)),
                       options, [], support)
 
         def polish(state):
@@ -815,8 +818,13 @@ class Judge:
         return poses, weighed, turned
 
     def _far_off(self, best_distances: np.ndarray, T: np.ndarray) -> float:
-        """far_off_test of pose T (scan -> model) against the best, whose distances are given."""
-        return far_off_test(best_distances, self._distances(T), self.gate / EVIDENCE_SIGMAS)
+        """far_off_test of pose T (scan -> model) against the best, whose distances are given.  The
+        support's points weigh for neither: a pose laid along the table explains them, the part's does not."""
+        rival = self._distances(T)
+        if self.support is not None:
+            beside = ~self.support.on_plane
+            best_distances, rival = best_distances[beside], rival[beside]
+        return far_off_test(best_distances, rival, self.gate / EVIDENCE_SIGMAS)
 
     def _distances(self, T: np.ndarray) -> np.ndarray:
         """Each verdict point's distance from the model's surface under pose T (mm): exact against a
@@ -1390,12 +1398,17 @@ class Support:
     on_plane: np.ndarray
     centre: np.ndarray
     normal: np.ndarray
+    band: float  # mm each side of the plane
+
+    def holds(self, points: np.ndarray) -> np.ndarray:
+        """Which of ``points`` lie within the band of the plane."""
+        return np.abs((points - self.centre) @ self.normal) <= self.band
 
     @classmethod
     def given(cls, points: np.ndarray, centre, normal, band: float):
         """The support a caller knows (a calibration's platform): the points within ``band`` mm of it."""
         centre, normal = np.asarray(centre, float), np.asarray(normal, float) / np.linalg.norm(normal)
-        return cls(np.abs((points - centre) @ normal) <= band, centre, normal)
+        return cls(np.abs((points - centre) @ normal) <= band, centre, normal, float(band))
 
     @classmethod
     def of(cls, points: np.ndarray, voxel: float, model_diagonal: float, seed: int):
@@ -1407,7 +1420,15 @@ class Support:
         height = (points[~on_plane] - centre) @ normal
         if np.count_nonzero(height < -voxel) > np.count_nonzero(height > voxel):
             normal = -normal
-        return cls(on_plane, centre, normal)
+        return cls(on_plane, centre, normal, voxel)
+
+
+def _off_support(points: np.ndarray, support: Support | None) -> np.ndarray:
+    """``points`` less those on the support, unless too few would be left to fit."""
+    if support is None:
+        return points
+    kept = points[~support.holds(points)]
+    return kept if len(kept) >= MIN_SCAN_POINTS else points
 
 
 def _depth_through_support(support: Support | None, surface: SurfaceModel, T: np.ndarray) -> float:

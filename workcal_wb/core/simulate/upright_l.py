@@ -73,7 +73,7 @@ def upright_l_block(edge_mm: float = 2.0) -> Cloud:
 def upright_l_scan(spec: UprightLSpec = UprightLSpec(), bunny_folder: Path | None = None) -> CellScan:
     """The scene of ``spec`` scanned (see the module docstring)."""
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 46]))
-    model, upright = _workpiece(spec.workpiece, bunny_folder)
+    model, upright = workpiece(spec.workpiece, bunny_folder)
     block = upright_l_block()
     block_pose = frames.rigid(frames.rot_z(rng.uniform(0.0, 360.0)),
                               (*rng.uniform(-BLOCK_SPREAD_MM, BLOCK_SPREAD_MM, 2), 0.0))  # ^Q P
@@ -106,7 +106,7 @@ def upright_l_scan(spec: UprightLSpec = UprightLSpec(), bunny_folder: Path | Non
     return cell
 
 
-def _workpiece(name: str, bunny_folder: Path | None) -> tuple[Cloud, np.ndarray]:
+def workpiece(name: str, bunny_folder: Path | None) -> tuple[Cloud, np.ndarray]:
     """(the model X-A as a closed outward mesh, ^N X: its upright frame, z up, from X)."""
     if name == "figurine":
         return shapes.figurine(), frames.invert(shapes.FIGURINE_BODY_IN_X)

@@ -1,0 +1,57 @@
+"""Small parts on a table as a depth camera sees them (simulate.depth_camera): the table and the
+neighbours in the crop, millimetres of noise, mixed pixels at the depth edges."""
+import numpy as np
+import pytest
+
+from workcal_wb.core import frames
+from workcal_wb.core.geometry import Cloud
+from workcal_wb.core.match import match
+from workcal_wb.core.result import OK
+from workcal_wb.core.simulate import shapes
+from workcal_wb.core.simulate.depth_camera import depth_camera_scan
+from workcal_wb.core.surface import SurfaceModel
+
+TOLERANCE_MM = 2.5
+
+
+def largest_displacement(mesh, U, truth) -> float:
+    moved = frames.apply(frames.invert(truth) @ U, mesh.points)
+    return float(np.linalg.norm(moved - mesh.points, axis=1).max())
+
+
+def test_the_scan_holds_the_part_the_table_and_a_neighbour_with_its_truth():
+    mesh = shapes.l_block()
+    scan = depth_camera_scan(mesh, 3)
+    roles, counts = np.unique(scan.roles, return_counts=True)
+    share = dict(zip(roles, counts / len(scan.roles)))
+    assert {"workpiece", "platform", "mixed"} <= set(share) and share["workpiece"] < 0.6 and share["platform"] > 0.2
+    assert 1_000 <= len(scan.points) <= 30_000
+    # The part's points lie on the model placed by the truth, within the sensor's noise.
+    on_part = frames.apply(frames.invert(scan.U), scan.points[scan.roles == "workpiece"])
+    distance = SurfaceModel(mesh, 0).exact_distance(on_part)
+    assert np.median(distance) < 2.0 and np.quantile(distance, 0.99) < 8.0
+
+
+@pytest.mark.parametrize("name, seed", [("L-block", 1), ("curved tile", 2)])
+def test_the_table_beside_a_part_does_not_pull_its_fit(name, seed):
+    """The table's points along the part's foot lie within the fit's reach of its side faces and rim:
+    fitted with them, the part is drawn along the table or tilted towards it."""
+    mesh = {"L-block": shapes.l_block(), "curved tile": shapes.shell()}[name]
+    scan = depth_camera_scan(mesh, seed)
+    result = match(Cloud(scan.points, name=f"{name} #{seed}"), SurfaceModel(mesh, 0), tolerance_mm=TOLERANCE_MM, seed=0)
+    assert result.status == OK, [r.code for r in result.reasons]
+    assert largest_displacement(mesh, result.matrix, scan.U) < 1.0
+
+
+def test_the_verdicts_table_takes_one_view_of_each_part_and_judges_it_at_its_tolerance():
+    from workcal_wb.core.benchmark.verdicts import DEPTH_CAMERA_TOLERANCE_MM, RIGHT_MM, depth_camera_cases, right
+
+    cases = depth_camera_cases(None, seed=0, views=1)
+    assert [c.name for c in cases] == ["depth camera L-block #0", "depth camera notched plate #0",
+                                       "depth camera curved tile #0"]
+    assert {c.tolerance_mm for c in cases} == {DEPTH_CAMERA_TOLERANCE_MM}
+    case = cases[0]
+    surface = SurfaceModel(case.model, 0)
+    slid = case.truth @ frames.rigid(translation=(2.0, 0.0, 0.0))  # the model slid 2 mm along its x
+    assert right(surface, slid, case.truth, max(RIGHT_MM, case.tolerance_mm))
+    assert not right(surface, slid, case.truth, RIGHT_MM)
