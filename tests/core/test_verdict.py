@@ -222,7 +222,8 @@ def test_a_right_pose_is_not_pulled_home_by_residuals_of_other_points(near_squar
     noisier, is left as it is (the tries, back home with the medium points' noise, looked five
     times better and it was "pulled home" onto itself)."""
     from workcal_wb.core.match import _slid_home
-    from workcal_wb.core.refine import MAD_TO_SIGMA, RefineState
+    from workcal_wb.core.refine import RefineState
+    from workcal_wb.core.robust import MAD_TO_SIGMA
 
     mesh, surface = near_square_plate
     points, truth = _view(mesh, 5, noise=0.1, samples=4000)
