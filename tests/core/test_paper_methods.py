@@ -5,7 +5,7 @@ import pytest
 
 from workcal_wb.core import frames
 from workcal_wb.core.benchmark.cases import bunny_cases, zoomed_on_workpiece
-from workcal_wb.core.benchmark.run import pose_errors
+from workcal_wb.core.benchmark.tables import pose_errors
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.paper_methods import hausdorff_distances, refine_paper
