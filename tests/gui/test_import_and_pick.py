@@ -19,6 +19,7 @@ from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.writers import write_ply, write_xyz  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
 from workcal_wb.fc import scan as fc_scan  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc import setup as fc_setup  # noqa: E402
@@ -169,7 +170,7 @@ def test_import_scan_makes_one_undoable_scan_object(doc, scene, scan_units, shoo
     scan_units.SetString("ScanUnits", "m")  # ignored: this PLY declares its unit (mm)
     (obj,) = import_scan.import_scan_files([str(scene["ply"])])
     points = scene["result"].points
-    assert fc_scan.is_scan(obj) and obj.Label == "car_scene.ply" and obj.Units == "mm"
+    assert lookups.is_scan(obj) and obj.Label == "car_scene.ply" and obj.Units == "mm"
     assert obj.Points.CountPoints == len(points) == obj.PointCount
     np.testing.assert_allclose(fc_scan.scan_cloud(obj).points, points, atol=2e-4)
     assert obj.ViewObject.Proxy.__class__.__name__ == "ViewProviderScan"
@@ -182,7 +183,7 @@ def test_import_scan_makes_one_undoable_scan_object(doc, scene, scan_units, shoo
     doc.undo()
     assert doc.getObject(name) is None and fc_setup.get_setup(doc)["scan"] is None
     doc.redo()
-    assert fc_scan.is_scan(doc.getObject(name)) and fc_setup.get_setup(doc)["scan"] is doc.getObject(name)
+    assert lookups.is_scan(doc.getObject(name)) and fc_setup.get_setup(doc)["scan"] is doc.getObject(name)
 
 
 def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):

@@ -66,11 +66,11 @@ def ask_for_model_file() -> str:
 
 
 def scan_candidates(doc) -> list:
-    from workcal_wb.fc import scan as fc_scan
+    from workcal_wb.fc import lookups
     from workcal_wb.fc.proxies import type_of
 
-    found = [o for o in doc.Objects if fc_scan.can_be_scan(o) and (type_of(o) is None or fc_scan.is_scan(o))]
-    return sorted(found, key=lambda o: not fc_scan.is_scan(o))  # WorkCal scans first
+    found = [o for o in doc.Objects if lookups.can_be_scan(o) and (type_of(o) is None or lookups.is_scan(o))]
+    return sorted(found, key=lambda o: not lookups.is_scan(o))  # WorkCal scans first
 
 
 def model_candidates(doc) -> list:

@@ -25,7 +25,7 @@ PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
 
 def choose_toolpath(doc, source):
     """Remember the document's toolpath (recorded ``fc.setup.choose_toolpath``, one undo step)."""
-    from workcal_wb.fc.toolpath import read_source
+    from workcal_wb.fc.toolpath_input import read_source
 
     read_source(source)  # a file that is no toolpath is refused before anything is recorded
     if isinstance(source, (str, os.PathLike)):

@@ -182,7 +182,7 @@ class GuidePanel:
 
     def calibration(self):
         """The document's latest calibration of the chosen scan and models (None when there is none)."""
-        from workcal_wb.fc.calibration_object import find_calibrations
+        from workcal_wb.fc.lookups import find_calibrations
 
         setup = get_setup(self.doc)
         for obj in reversed(find_calibrations(self.doc)):

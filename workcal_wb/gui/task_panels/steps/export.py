@@ -227,7 +227,7 @@ class ExportStep(Step):
 
     def default_path(self) -> str:
         from workcal_wb.core.toolpath import FORMATS
-        from workcal_wb.fc.toolpath import source_label
+        from workcal_wb.fc.toolpath_input import source_label
         from workcal_wb.gui.commands.toolpath import start_folder
 
         source = self.guide.steps["toolpath"].chosen()

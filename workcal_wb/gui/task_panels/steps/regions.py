@@ -66,7 +66,7 @@ class RegionsStep(Step):
 
     def _calibration_regions(self) -> dict:
         """The regions the latest calibration found for itself (automatic regions), or {}."""
-        from workcal_wb.fc.calibration_object import result_of
+        from workcal_wb.fc.lookups import result_of
 
         calibration = self.guide.calibration()
         if calibration is None or not calibration.ResultJson:

@@ -48,7 +48,7 @@ class ToolpathStep(Step):
         return (calibrated_paths(calibration) or [None])[-1] if calibration is not None else None
 
     def state(self) -> tuple:
-        from workcal_wb.fc.toolpath import source_label
+        from workcal_wb.fc.toolpath_input import source_label
 
         source = self.chosen()
         if source is None:
@@ -58,7 +58,8 @@ class ToolpathStep(Step):
         return DONE, translate("WorkCal", "{}, shown in the robot frame").format(source_label(source))
 
     def refresh(self) -> None:
-        from workcal_wb.fc.toolpath import source_label, toolpath_sources
+        from workcal_wb.fc.toolpath import toolpath_sources
+        from workcal_wb.fc.toolpath_input import source_label
 
         source = self.chosen()
         self.sources = list(toolpath_sources(self.doc))
