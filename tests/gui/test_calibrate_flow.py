@@ -360,7 +360,7 @@ def _gcode_file(flow):
 def test_07_transform_and_export_toolpath(step, output_dir):
     from workcal_wb.core.toolpath import linearised, read_gcode
     from workcal_wb.fc.toolpath_input import read_toolpath
-    from workcal_wb.gui.commands.toolpath import choose_toolpath, export_program, transform_toolpath
+    from workcal_wb.gui.actions import choose_toolpath, export_program, transform_toolpath
 
     flow = step
     doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
@@ -397,7 +397,7 @@ def test_07_transform_and_export_toolpath(step, output_dir):
 def test_08_failed_calibration_needs_force(step):
     from workcal_wb.core.result import CalibrationResult
     from workcal_wb.core.toolpath import CalibrationNotOk
-    from workcal_wb.gui.commands.toolpath import export_program, transform_toolpath
+    from workcal_wb.gui.actions import export_program, transform_toolpath
 
     flow = step
     doc, cal = flow["doc"], flow["cal"]

@@ -310,7 +310,7 @@ def test_07_toolpath(step, shoot_window, check_page, view_share):
     panel.go("toolpath")
     page = panel.steps["toolpath"]
     gcode = str(step["dir"] / "toolpath.nc")
-    from workcal_wb.gui.commands.toolpath import start_folder
+    from workcal_wb.gui.actions import start_folder
 
     assert os.path.samefile(start_folder(step["doc"]), step["dir"])  # the file dialog opens where the scan lies
     page.use_file(gcode)
