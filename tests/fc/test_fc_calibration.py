@@ -13,7 +13,7 @@ from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
 from workcal_wb.fc import lookups  # noqa: E402
-from workcal_wb.fc import placed_model  # noqa: E402
+from workcal_wb.fc import placed_model, proxies  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of as matrix  # noqa: E402
 
@@ -103,7 +103,7 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
             assert cal.getPropertyByName(prop) == value
         np.testing.assert_allclose(matrix(cal.W), W, atol=1e-9)
         np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-9)
-        assert co.type_of(cal) == co.TYPE and "WorkCalRole" not in cal.PropertiesList
+        assert proxies.type_of(cal) == co.TYPE and "WorkCalRole" not in cal.PropertiesList
         assert {"scan": cal.Scan.Name, "workpiece": cal.Workpiece.Name, "reference": cal.Reference.Name} == input_names
         assert "Touched" not in cal.State
         again = lookups.result_of(cal)
