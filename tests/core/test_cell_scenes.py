@@ -8,7 +8,6 @@ from workcal_wb.core import calibration, frames, physics, pointops
 from workcal_wb.core.edges import centre_on_edges
 from workcal_wb.core.regions import LINK_SPACINGS, _clusters, find_platform, near_points
 from workcal_wb.core.surface import SurfaceModel
-from workcal_wb.core.benchmark.cases import random_motion
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.result import (DISTORTION, MANY_WAYS, RIVAL, SEARCH_DOUBT, SPLIT_UNEXPLAINED, Candidate, Reason,
                                      codes)
@@ -57,7 +56,7 @@ def test_a_whole_scene_moved_by_any_rigid_motion_calibrates_to_the_same_W():
     assert first.status == "ok", first.reasons
     rng = np.random.default_rng(11)
     for _ in range(5):
-        moved = cell.moved(random_motion(rng, shift_mm=3000.0))
+        moved = cell.moved(frames.random_motion(rng, shift_mm=3000.0))
         again = _calibrated(moved)
         rotation, displacement = _errors(again.W, first.W, cell.workpiece_model)
         assert again.status == "ok" and rotation < 0.01 and displacement < 0.01, (rotation, displacement)
@@ -277,7 +276,7 @@ def _distorted(cell, strain: np.ndarray, seed: int):
     linear = np.eye(4)
     linear[:3, :3] += strain
     distorted = cell.moved(linear)
-    return distorted.moved(random_motion(np.random.default_rng(seed), shift_mm=3000.0))
+    return distorted.moved(frames.random_motion(np.random.default_rng(seed), shift_mm=3000.0))
 
 
 @pytest.mark.parametrize("seed, strain", [

@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 
 from workcal_wb.core import frames
-from workcal_wb.core.benchmark.cases import (bunny_cases, random_motion, with_clutter, with_overlap,
-                                             zoomed_on_workpiece)
-from workcal_wb.core.benchmark.run import pose_errors
+from workcal_wb.core.benchmark.cases import bunny_cases, with_clutter, with_overlap, zoomed_on_workpiece
+from workcal_wb.core.benchmark.tables import pose_errors
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
@@ -31,7 +30,7 @@ def _capture(workpiece, seed, azimuth=-30.0, **scene_options):
     """The workpiece region of a zoomed capture, moved by a random motion: (points, model, U)."""
     scene = build_scene(workpiece, seed=seed, **scene_options)
     scan = zoomed_on_workpiece(scene, azimuth, seed).scan(scene)
-    motion = random_motion(np.random.default_rng(seed))
+    motion = frames.random_motion(np.random.default_rng(seed))
     return frames.apply(motion, scan.points[scan.mask("workpiece")]), scene.workpiece_model(), motion @ scan.U
 
 

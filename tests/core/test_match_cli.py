@@ -6,7 +6,7 @@ import pytest
 
 from workcal_wb.cli import build_parser, main
 from workcal_wb.core import frames
-from workcal_wb.core.benchmark.cases import random_motion, zoomed_on_workpiece
+from workcal_wb.core.benchmark.cases import zoomed_on_workpiece
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.scene import build_scene
@@ -19,7 +19,7 @@ def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("match")
     scene = build_scene("car", seed=8)
     scan = zoomed_on_workpiece(scene, -20.0, 8, pixel_pitch_mm=0.6).scan(scene)
-    motion = random_motion(np.random.default_rng(8))
+    motion = frames.random_motion(np.random.default_rng(8))
     write_ply(folder / "scan_m.ply", Cloud(frames.apply(motion, scan.points[scan.mask("workpiece")])), units="m")
     write_ply(folder / "car.ply", scene.workpiece_model())
     sphere = build_scene(shapes.sphere(60.0), seed=1)

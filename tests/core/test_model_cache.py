@@ -13,7 +13,7 @@ import pytest
 
 from workcal_wb.cli import main
 from workcal_wb.core import frames
-from workcal_wb.core.benchmark.cases import random_motion, zoomed_on_workpiece
+from workcal_wb.core.benchmark.cases import zoomed_on_workpiece
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.model_cache import MAGIC, SUFFIX, ModelCache, cloud_key, default_folder
@@ -33,7 +33,7 @@ def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("cache")
     scene = build_scene("car", seed=5)
     scan = zoomed_on_workpiece(scene, 40.0, 5, pixel_pitch_mm=0.7).scan(scene)
-    motion = random_motion(np.random.default_rng(5))
+    motion = frames.random_motion(np.random.default_rng(5))
     write_ply(folder / "scan.ply", Cloud(frames.apply(motion, scan.points[scan.mask("workpiece")])))
     write_ply(folder / "car.ply", scene.workpiece_model())
     return folder, motion @ scan.U

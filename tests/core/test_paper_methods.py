@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from workcal_wb.core import frames
-from workcal_wb.core.benchmark.cases import bunny_cases, random_motion, zoomed_on_workpiece
-from workcal_wb.core.benchmark.run import pose_errors
+from workcal_wb.core.benchmark.cases import bunny_cases, zoomed_on_workpiece
+from workcal_wb.core.benchmark.tables import pose_errors
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.paper_methods import hausdorff_distances, refine_paper
@@ -17,7 +17,7 @@ from workcal_wb.core.surface import NearestGrid, SurfaceModel
 def car():
     scene = build_scene("car", seed=5)
     scan = zoomed_on_workpiece(scene, -40.0, 5).scan(scene)
-    motion = random_motion(np.random.default_rng(5))
+    motion = frames.random_motion(np.random.default_rng(5))
     points = frames.apply(motion, scan.points[scan.mask("workpiece")])
     return points, SurfaceModel(scene.workpiece_model()), motion @ scan.U
 

@@ -142,10 +142,9 @@ def test_a_turn_that_maps_most_of_a_part_onto_itself_is_tried_whatever_its_axis(
     table again with all but the longer leg's last centimetre where it was, and turns about no
     principal axis (the unequal legs tilt them).  In any frame it is among the flips every match tries,
     refined into the block's best self-map."""
-    from workcal_wb.core.benchmark.cases import random_motion
     from workcal_wb.core.simulate.upright_l import upright_l_block
 
-    motion = random_motion(np.random.default_rng(seed), shift_mm=800.0)
+    motion = frames.random_motion(np.random.default_rng(seed), shift_mm=800.0)
     surface = SurfaceModel(upright_l_block().transformed(motion), seed)
     swap = motion @ frames.rigid(np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])) @ frames.invert(motion)
     shares = []

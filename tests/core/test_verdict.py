@@ -13,7 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from workcal_wb.core import frames, raycast
-from workcal_wb.core.benchmark.cases import random_motion, zoomed_on_workpiece
+from workcal_wb.core.benchmark.cases import zoomed_on_workpiece
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.result import (FACE_CONTINUED, NOISE_ABOVE_TOLERANCE, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, SYMMETRIC,
@@ -38,7 +38,7 @@ def _view(mesh, seed, noise=0.1, samples=20000, above=None):
         direction = np.sin(elevation) * up + np.cos(elevation) * across / np.linalg.norm(across)
     scan = scan_part(mesh, pose, direction, rng.uniform(400, 900), samples=samples, noise_sigma_mm=noise,
                      z_resolution_mm=0.0, seed=seed)
-    motion = random_motion(rng)
+    motion = frames.random_motion(rng)
     return frames.apply(motion, scan.points), motion @ scan.U
 
 
@@ -125,7 +125,7 @@ def test_noise_above_the_tolerance_is_said_in_one_sentence(workpiece, seed):
     if workpiece == "car":
         scene = build_scene("car", seed=seed)
         scan = zoomed_on_workpiece(scene, -40.0, seed, noise_sigma_mm=1.5, pixel_pitch_mm=0.8).scan(scene)
-        motion = random_motion(np.random.default_rng(seed))
+        motion = frames.random_motion(np.random.default_rng(seed))
         points, truth, model = (frames.apply(motion, scan.points[scan.mask("workpiece")]), motion @ scan.U,
                                 scene.workpiece_model())
     else:
@@ -222,7 +222,8 @@ def test_a_right_pose_is_not_pulled_home_by_residuals_of_other_points(near_squar
     noisier, is left as it is (the tries, back home with the medium points' noise, looked five
     times better and it was "pulled home" onto itself)."""
     from workcal_wb.core.match import _slid_home
-    from workcal_wb.core.refine import MAD_TO_SIGMA, RefineState
+    from workcal_wb.core.refine import RefineState
+    from workcal_wb.core.robust import MAD_TO_SIGMA
 
     mesh, surface = near_square_plate
     points, truth = _view(mesh, 5, noise=0.1, samples=4000)
@@ -331,7 +332,7 @@ def test_a_face_running_on_past_the_placed_model_is_never_ok(seed):
     from workcal_wb.core.benchmark.verdicts import right
 
     rng = np.random.default_rng(seed)
-    motion = np.eye(4) if seed == 0 else random_motion(rng)
+    motion = np.eye(4) if seed == 0 else frames.random_motion(rng)
     surface = SurfaceModel(shapes.plate(), 0)
     result = match(Cloud(frames.apply(motion, _plate_rows()), name="plate rows"), surface, tolerance_mm=0.3, seed=0)
     assert result.status != "ok" or right(surface, result.matrix, motion), result.reasons
@@ -343,7 +344,7 @@ def test_a_part_longer_than_its_model_is_not_ok():
     rng = np.random.default_rng(2)
     surface = SurfaceModel(shapes.plate(), 0)
     points = _plate_rows(x_end=90.0, row_gap=6.0) + rng.normal(0, 0.02, (1, 3))
-    result = match(Cloud(frames.apply(random_motion(rng), points), name="longer plate"), surface, tolerance_mm=0.3,
+    result = match(Cloud(frames.apply(frames.random_motion(rng), points), name="longer plate"), surface, tolerance_mm=0.3,
                    seed=0)
     assert result.status != "ok"
     assert {FACE_CONTINUED, OUTLINE_CONTINUED} & set(codes(result.reasons)), result.reasons
@@ -427,7 +428,7 @@ def test_a_part_on_a_table_is_not_ok_upside_down(name, model, motion_seed, seed)
     from workcal_wb.core.benchmark.verdicts import right
 
     data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{name}-on-table.npz")
-    motion = np.eye(4) if motion_seed is None else random_motion(np.random.default_rng(motion_seed), 500.0)
+    motion = np.eye(4) if motion_seed is None else frames.random_motion(np.random.default_rng(motion_seed), 500.0)
     surface = SurfaceModel(model(), 0)
     scan = Cloud(frames.apply(motion, data["scan"].astype(float)), name=f"{name} on a table")
     result = match(scan, surface, tolerance_mm=0.3, seed=seed)
@@ -534,7 +535,7 @@ def test_a_shell_moved_to_another_frame_is_not_ok_on_its_other_face(case, model,
     from workcal_wb.core.benchmark.verdicts import right
 
     data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / f"{case}.npz")
-    motion = random_motion(np.random.default_rng(motion_seed), 500.0)
+    motion = frames.random_motion(np.random.default_rng(motion_seed), 500.0)
     surface = SurfaceModel(_standing(model()), 0)
     scan = Cloud(frames.apply(motion, data["scan"].astype(float)), name=case)
     result = match(scan, surface, tolerance_mm=0.3, seed=2)

@@ -14,6 +14,7 @@ from workcal_wb.core.readers import read_cloud  # noqa: E402
 from workcal_wb.core.toolpath import read_gcode  # noqa: E402
 from workcal_wb.core.result import CalibrationResult  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
 from workcal_wb.fc.models import import_model  # noqa: E402
 from workcal_wb.fc.scan import import_scan  # noqa: E402
 from workcal_wb.fc.toolpath import make_calibrated_path  # noqa: E402
@@ -124,7 +125,7 @@ def test_a_corrupt_stored_result_is_reported_and_changes_nothing(doc, calibratio
         calibration.ResultJson = apply(result_json(), random_mutations(rng)).decode("utf-8", "replace")
         calibration.purgeTouched()
         try:
-            co.result_of(calibration)
+            lookups.result_of(calibration)
             continue  # still a usable result: nothing to report
         except WorkCalError:
             pass

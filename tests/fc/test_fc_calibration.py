@@ -12,7 +12,8 @@ from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
-from workcal_wb.fc import placed_model  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
+from workcal_wb.fc import placed_model, proxies  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of as matrix  # noqa: E402
 
@@ -65,7 +66,7 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
     doc, objs = document
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], tolerance_mm=0.3,
                               method="robust", seed=SEED)
-    assert cal.TypeId == "Part::FeaturePython" and co.is_calibration(cal)
+    assert cal.TypeId == "Part::FeaturePython" and lookups.is_calibration(cal)
     assert cal.Status == "ok", cal.Reasons
     W, U, V = matrix(cal.W), matrix(cal.U), matrix(cal.V)
     assert_pose(W, scene.W)
@@ -82,7 +83,7 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
     assert cal.Scan == objs["scan"] and cal.Workpiece == objs["workpiece"] and cal.Reference == objs["reference"]
     assert cal.Method == "robust" and cal.Tolerance.Value == pytest.approx(0.3) and cal.Regions == "Auto"
     assert len(cal.Shape.Edges) == 9  # triads of X, B and S
-    result = co.result_of(cal)
+    result = lookups.result_of(cal)
     np.testing.assert_allclose(result.W, W, atol=1e-12)
     stored = json.loads(cal.ResultJson)
     before = {p: cal.getPropertyByName(p) for p in ("Status", "Warnings", "Reasons", "Method", "Regions", "Seed")}
@@ -102,10 +103,10 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
             assert cal.getPropertyByName(prop) == value
         np.testing.assert_allclose(matrix(cal.W), W, atol=1e-9)
         np.testing.assert_allclose(matrix(cal.Placement), W, atol=1e-9)
-        assert co.type_of(cal) == co.TYPE and "WorkCalRole" not in cal.PropertiesList
+        assert proxies.type_of(cal) == co.TYPE and "WorkCalRole" not in cal.PropertiesList
         assert {"scan": cal.Scan.Name, "workpiece": cal.Workpiece.Name, "reference": cal.Reference.Name} == input_names
         assert "Touched" not in cal.State
-        again = co.result_of(cal)
+        again = lookups.result_of(cal)
         assert again.to_dict() == result.to_dict()
 
         calls = []
@@ -139,7 +140,7 @@ def test_recomputes_when_the_scan_changes(simulated, document):
     # An option change recomputes too: the stored options and the result follow.
     cal.Tolerance = 0.5
     doc.recompute()
-    assert co.result_of(cal).tolerance_mm == pytest.approx(0.5)
+    assert lookups.result_of(cal).tolerance_mm == pytest.approx(0.5)
 
 
 def test_picked_regions_are_used(simulated, document):
@@ -152,7 +153,7 @@ def test_picked_regions_are_used(simulated, document):
     set_regions(objs["scan"], workpiece=np.flatnonzero(scan.mask("workpiece")),
                 reference=np.flatnonzero(scan.mask("reference")))
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], regions="Picked", seed=SEED)
-    assert cal.Regions == "Picked" and co.result_of(cal).regions["source"] == "user"
+    assert cal.Regions == "Picked" and lookups.result_of(cal).regions["source"] == "user"
     assert_pose(matrix(cal.W), scene.W)
 
 
@@ -174,7 +175,7 @@ def test_the_points_off_the_models_of_a_loose_region_come_from_the_document(tmp_
         set_regions(scan, workpiece=scene.regions["workpiece"], reference=scene.regions["reference"])
         cal = co.make_calibration(doc, scan, workpiece, reference, regions="Picked", seed=SEED, resamples=2)
         assert cal.Status == "failed" and any("reference region explained" in r for r in cal.Reasons)
-        result = co.result_of(cal)
+        result = lookups.result_of(cal)
         said = fc_regions.off_model(cal)
         np.testing.assert_array_equal(said["reference"]["indices"], result.regions["reference_off_model"])
         assert said["reference"]["count"] > 1000 and "platform's plane" in said["reference"]["where"]
@@ -221,7 +222,7 @@ def test_failed_calibration_is_kept_with_its_reasons(simulated, document):
                               regions="Picked", resamples=2, seed=SEED)
     assert cal.Status == "failed"
     assert cal.Reasons
-    result = co.result_of(cal)
+    result = lookups.result_of(cal)
     assert result.status == cal.Status
 
 
@@ -302,7 +303,7 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     dev = deviation_map.make_deviation_map(cal)
     assert names(doc) == sorted(before + [dev.Name])
     d = np.array(dev.Deviations)
-    assert len(d) == len(co.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
+    assert len(d) == len(lookups.result_of(cal).regions["workpiece"]) == dev.Points.CountPoints
     assert len(dev.Color) == len(d)
     assert np.nanmax(d) > 1.0  # the lump stands out of the model
     assert dev.Max.Value > 1.0 and dev.Within > 50
@@ -333,7 +334,7 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
         np.testing.assert_array_equal(np.array(dev.Deviations), d)
         np.testing.assert_allclose(np.array(dev.Color), np.array(colours), atol=1 / 255)  # saved as 8-bit RGBA
         assert "Touched" not in dev.State
-        assert dev.Calibration is not None and co.is_calibration(dev.Calibration)
+        assert dev.Calibration is not None and lookups.is_calibration(dev.Calibration)
     finally:
         FreeCAD.closeDocument(doc.Name)
 
@@ -362,7 +363,7 @@ def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     cal = co.make_calibration(doc, objs["scan"], objs["workpiece"], objs["reference"], toolpath=str(gcode),
                               seed=SEED)
     assert cal.GcodeFile == str(gcode) and cal.Toolpath is None
-    result = co.result_of(cal)
+    result = lookups.result_of(cal)
     assert result.inputs["toolpath_points"] > 100
     assert 0 < cal.AtToolpath.Value == pytest.approx(result.uncertainty["toolpath_bound_mm"])
     assert cal.AtToolpath.Value < 0.3

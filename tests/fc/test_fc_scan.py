@@ -12,7 +12,7 @@ from workcal_wb.core.errors import InputError  # noqa: E402
 from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.writers import write_ply, write_xyz  # noqa: E402
 from workcal_wb.fc import init as fc_init  # noqa: E402
-from workcal_wb.fc import models, scan, setup  # noqa: E402
+from workcal_wb.fc import lookups, models, scan, setup  # noqa: E402
 
 
 @pytest.fixture
@@ -46,7 +46,7 @@ def reopen(doc, path):
 def test_make_scan_round_trip_is_float32_exact(doc):
     cloud = sample_cloud(normals=True)
     obj = scan.make_scan(doc, cloud, name="my scan.ply", units="m", source="/data/my scan.ply")
-    assert obj.TypeId == "Points::FeaturePython" and scan.is_scan(obj)
+    assert obj.TypeId == "Points::FeaturePython" and lookups.is_scan(obj)
     assert obj.Label == "my scan.ply" and obj.Units == "m" and obj.SourceFile == "/data/my scan.ply"
     assert obj.Points.CountPoints == obj.PointCount == len(cloud)
     back = scan.scan_cloud(obj)
@@ -64,7 +64,7 @@ def test_scan_cloud_survives_save_and_reopen(doc, tmp_path):
     before, name = scan.scan_cloud(obj).points, obj.Name
     doc2 = reopen(doc, tmp_path / "scan.FCStd")
     again = doc2.getObject(name)
-    assert scan.is_scan(again)
+    assert lookups.is_scan(again)
     np.testing.assert_array_equal(scan.scan_cloud(again).points, before)
 
 
@@ -210,7 +210,7 @@ def test_import_type_is_registered_and_inserts_a_scan(doc, tmp_path):
     assert "workcal_wb.fc.init" in FreeCAD.getImportType("xyz")
     write_xyz(tmp_path / "f.xyz", sample_cloud(20))
     obj = fc_init.insert(str(tmp_path / "f.xyz"), doc.Name)
-    assert scan.is_scan(obj) and obj.Document is doc and obj.PointCount == 20
+    assert lookups.is_scan(obj) and obj.Document is doc and obj.PointCount == 20
 
 
 # --- models -------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ from workcal_wb.core.result import CalibrationResult  # noqa: E402
 from workcal_wb.core.toolpath import ExportRefused, linearised, transformed  # noqa: E402
 from workcal_wb.fc import toolpath as fctp  # noqa: E402
 from workcal_wb.fc.placements import matrix_of  # noqa: E402
+from workcal_wb.fc.toolpath_input import read_toolpath  # noqa: E402
 
 TURNED = frames.rigid(frames.rot_z(30.0), (600.0, -50.0, 120.0))  # keeps the XY arcs of a Profile
 TILTED = frames.from_euler_zyz(40.0, 20.0, -10.0, (800.0, 100.0, 50.0))
@@ -49,7 +50,7 @@ def job():
 
 
 def test_read_job_follows_its_commands_with_feeds_in_mm_per_min(job):
-    tp = fctp.read_toolpath(job)
+    tp = read_toolpath(job)
     commands = [c for op in job.Operations.Group for c in op.Path.Commands if c.Name in ("G0", "G1", "G2", "G3")]
     assert len(tp) == len(commands) > 10
     for move, command in zip(tp.moves, commands):
@@ -67,10 +68,10 @@ def path_object(path, name="calibrated"):
 
 
 def test_path_object_round_trip_keeps_arcs(job):
-    tp = fctp.read_toolpath(job)
+    tp = read_toolpath(job)
     path, forced = fctp.calibrated_path(tp, calibration(TURNED))
     assert not forced
-    again = fctp.read_toolpath(path_object(path))
+    again = read_toolpath(path_object(path))
     expected = transformed(tp, TURNED)
     assert [m.kind for m in again.moves] == [m.kind for m in expected.moves]
     for m, n in zip(again.moves, expected.moves):
@@ -81,15 +82,15 @@ def test_path_object_round_trip_keeps_arcs(job):
 
 
 def test_path_object_of_a_tilted_w_matches_numpy_point_by_point(job):
-    tp = fctp.read_toolpath(job)
+    tp = read_toolpath(job)
     path, _ = fctp.calibrated_path(tp, calibration(TILTED))
     assert {c.Name for c in path.Commands if not c.Name.startswith("(")} <= {"G0", "G1"}
-    again = fctp.read_toolpath(path_object(path))
+    again = read_toolpath(path_object(path))
     np.testing.assert_allclose(again.points(), frames.apply(TILTED, linearised(tp).points()), atol=1e-6)
 
 
 def test_failed_calibration_is_refused_unless_forced(job):
-    tp = fctp.read_toolpath(job)
+    tp = read_toolpath(job)
     with pytest.raises(ExportRefused, match="status is 'failed'"):
         fctp.calibrated_path(tp, calibration(TURNED, "failed"))
     path, forced = fctp.calibrated_path(tp, calibration(TURNED, "failed"), force=True)
@@ -99,13 +100,13 @@ def test_failed_calibration_is_refused_unless_forced(job):
 def test_not_a_path_is_an_input_error(job):
     model = job.Model.Group[0]
     with pytest.raises(InputError, match="neither a Path/CAM Job"):
-        fctp.read_toolpath(model)
+        read_toolpath(model)
 
 
 @pytest.mark.skipif(not fctp.robot_available(), reason="FreeCAD's Robot workbench is not available")
 def test_robot_trajectory_waypoints(job):
     doc = job.Document
-    tp = fctp.read_toolpath(job)
+    tp = read_toolpath(job)
     obj = fctp.make_robot_trajectory(doc, tp, calibration(TILTED), rapid_feed_mm_min=3000.0)
     waypoints = obj.Trajectory.Waypoints
     moves = linearised(tp).moves
@@ -129,17 +130,17 @@ def test_a_comment_command_never_becomes_a_move():
     commands = [Path.Command("G0", {"X": 0.0, "Y": 0.0, "Z": 20.0}),
                 Path.Command("(label)\nG0 X0 Y0 Z-500\n;x)"),
                 Path.Command("G1", {"X": 10.0, "Y": 0.0, "Z": 5.0, "F": 5.0})]
-    tp = fctp.read_toolpath(path_object(Path.Path(commands)))
+    tp = read_toolpath(path_object(Path.Path(commands)))
     np.testing.assert_allclose(tp.points(), [[0, 0, 20], [10, 0, 5]], atol=1e-9)
     assert "Z-500" in tp.comments[1] and "\n" not in tp.comments[1]
     moved, _ = fctp.calibrated_path(tp, calibration(TURNED))
-    again = fctp.read_toolpath(path_object(moved))
+    again = read_toolpath(path_object(moved))
     np.testing.assert_allclose(again.points(), frames.apply(TURNED, tp.points()), atol=1e-6)
     assert all("\n" not in c.Name for c in moved.Commands)
 
     bad = [commands[0], Path.Command("G1\nG0 Z-500", {"X": 1.0})]
     with pytest.raises(InputError, match=r"'injected': line 2: G1 and G0 are both in the motion group"):
-        fctp.read_toolpath(path_object(Path.Path(bad), "injected"))
+        read_toolpath(path_object(Path.Path(bad), "injected"))
 
 
 def test_a_recorded_export_names_its_robot_by_id_and_its_tool_by_six_numbers(job, tmp_path):
@@ -152,6 +153,6 @@ def test_a_recorded_export_names_its_robot_by_id_and_its_tool_by_six_numbers(job
     assert options["robot"] == load_robot("kuka_kr16_2") and options["machine"] == "robot"
     np.testing.assert_allclose(options["tool"], frames.rigid(None, (0.0, 0.0, 150.0)))
     out = tmp_path / "profile.src"
-    exported = export(fctp.read_toolpath(job), calibration(TURNED), "krl", out, **options)
+    exported = export(read_toolpath(job), calibration(TURNED), "krl", out, **options)
     assert exported.reach.reachable and "reach: checked for KUKA KR 16-2" in out.read_text()
     assert fctp.robot_options() == {}

@@ -20,7 +20,8 @@ from workcal_wb.core.toolpath import (CalibrationNotOk, Move, ToolTilted, Toolpa
                                       read_gcode)
 from workcal_wb.core.toolpath.safety import PathOffModel  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
-from workcal_wb.fc import proxies, regions, report, setup, toolpath  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
+from workcal_wb.fc import proxies, regions, report, setup, toolpath, toolpath_input  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of  # noqa: E402
 from workcal_wb.fc.scan import get_regions, make_scan  # noqa: E402
@@ -66,12 +67,12 @@ def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
     assert setup.toolpath_of(doc) == scene["gcode"] and doc.UndoNames[0] == "Choose toolpath"
     cal = co.make_calibration(doc, seed=SEED, resamples=2)  # scan, models and toolpath from the setup
     assert cal.Status == "ok", cal.Reasons
-    assert cal.GcodeFile == scene["gcode"] and co.result_of(cal).inputs["toolpath_points"] > 100
+    assert cal.GcodeFile == scene["gcode"] and lookups.result_of(cal).inputs["toolpath_points"] > 100
     # The calibrated toolpath: the chosen toolpath carried into B by W, a Path object that follows W.
     path_obj = toolpath.make_calibrated_path(cal)
     assert proxies.type_of(path_obj) == toolpath.TYPE and toolpath.calibrated_paths(cal) == [path_obj]
     expected = linearised(read_gcode(scene["gcode"])).points()
-    shown = toolpath.read_toolpath(path_obj).points()
+    shown = toolpath_input.read_toolpath(path_obj).points()
     np.testing.assert_allclose(shown, frames.apply(matrix_of(cal.W), expected), atol=1e-5)
     assert np.abs(shown - frames.apply(scene["world"].W, expected)).max() < 0.1  # against the truth
     assert "finishing.nc" in path_obj.Label
@@ -103,7 +104,7 @@ def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
 def test_a_calibration_that_is_not_ok_refuses_the_calibrated_toolpath(doc, scene):
     setup.choose_toolpath(doc, scene["gcode"])
     cal = co.make_calibration(doc, seed=SEED, resamples=1)
-    good = co.result_of(cal)
+    good = lookups.result_of(cal)
     co.store_result(cal, CalibrationResult.from_dict({**good.to_dict(), "status": "ambiguous",
                                                       "reasons": ["test: two poses"]}), cal.InputsKey)
     before = names(doc)
@@ -125,7 +126,7 @@ def test_accepting_is_one_undo_step_and_a_new_result_clears_it(doc):
     assert not cal.Accepted
     doc.redo()
     co.update_calibration(cal, tolerance_mm=0.4)
-    assert not cal.Accepted and co.result_of(cal).tolerance_mm == pytest.approx(0.4)
+    assert not cal.Accepted and lookups.result_of(cal).tolerance_mm == pytest.approx(0.4)
 
 
 def test_picked_regions_recorded_as_ranges_replay_exactly(doc, scene):
@@ -180,8 +181,8 @@ def test_one_identity_scheme_and_older_files_lose_their_role_property(doc, tmp_p
     reopened = FreeCAD.openDocument(path)
     try:
         cal = reopened.getObject(name)
-        assert co.is_calibration(cal) and "WorkCalRole" not in cal.PropertiesList
-        assert co.find_calibrations(reopened) == [cal]
+        assert lookups.is_calibration(cal) and "WorkCalRole" not in cal.PropertiesList
+        assert lookups.find_calibrations(reopened) == [cal]
         assert {"ShowFrames", "WMatrix"}.isdisjoint(cal.PropertiesList) and cal.Frames is False
         assert cal.getTypeIdOfProperty("Status") == "App::PropertyEnumeration" and cal.Status == "ok"
         np.testing.assert_allclose(matrix_of(cal.W), W, atol=1e-9)

@@ -24,6 +24,7 @@ from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.simulate.toolpath_sample import sample_toolpath  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
 from workcal_wb.fc import placed_model  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc.placements import matrix_of  # noqa: E402
@@ -205,7 +206,7 @@ def test_04_calibrate_through_the_guide(step, output_dir, page_fits):
     assert max(progress_seen) > 0  # the status-bar progress bar moved
     assert guide.shown == "result"  # the result stays open
     cal = guide.calibration()
-    assert co.is_calibration(cal) and cal.Status == "ok", cal.Reasons
+    assert lookups.is_calibration(cal) and cal.Status == "ok", cal.Reasons
     assert_pose(matrix_of(cal.W), scene.W)
     assert_pose(matrix_of(cal.U), flow["scan"].U)
     assert_pose(matrix_of(cal.V), flow["scan"].V)
@@ -311,7 +312,7 @@ def test_05_save_close_reopen(step, output_dir):
     pump()
     flow["doc"] = doc
     cal = doc.getObject(name)
-    assert co.is_calibration(cal) and cal.ResultJson == stored and cal.Status == "ok"
+    assert lookups.is_calibration(cal) and cal.ResultJson == stored and cal.Status == "ok"
     np.testing.assert_allclose(matrix_of(cal.Placement), W, atol=1e-9)
     from workcal_wb.gui.view_providers.calibration import ViewProviderCalibration
 
@@ -358,8 +359,8 @@ def _gcode_file(flow):
 
 def test_07_transform_and_export_toolpath(step, output_dir):
     from workcal_wb.core.toolpath import linearised, read_gcode
-    from workcal_wb.fc.toolpath import read_toolpath
-    from workcal_wb.gui.commands.toolpath import choose_toolpath, export_program, transform_toolpath
+    from workcal_wb.fc.toolpath_input import read_toolpath
+    from workcal_wb.gui.actions import choose_toolpath, export_program, transform_toolpath
 
     flow = step
     doc, cal, scene = flow["doc"], flow["cal"], flow["scene"]
@@ -396,11 +397,11 @@ def test_07_transform_and_export_toolpath(step, output_dir):
 def test_08_failed_calibration_needs_force(step):
     from workcal_wb.core.result import CalibrationResult
     from workcal_wb.core.toolpath import CalibrationNotOk
-    from workcal_wb.gui.commands.toolpath import export_program, transform_toolpath
+    from workcal_wb.gui.actions import export_program, transform_toolpath
 
     flow = step
     doc, cal = flow["doc"], flow["cal"]
-    good = co.result_of(cal)
+    good = lookups.result_of(cal)
     bad = CalibrationResult.from_dict({**good.to_dict(), "status": "failed", "reasons": ["test: gates failed"]})
     failed = co.make_calibration(doc, cal.Scan, cal.Workpiece, cal.Reference, resamples=1, name="FailedCalibration")
     co.store_result(failed, bad, failed.InputsKey)
@@ -527,7 +528,7 @@ def test_12_double_click_opens_the_result_and_redo_reruns(step):
     assert page.start()
     assert page.wait(120) == "done", page.last_error
     assert object_names(doc) == before and doc.UndoCount == undo_before + 1  # the same object, one undo step
-    assert cal.Tolerance.Value == pytest.approx(0.4) and co.result_of(cal).tolerance_mm == pytest.approx(0.4)
+    assert cal.Tolerance.Value == pytest.approx(0.4) and lookups.result_of(cal).tolerance_mm == pytest.approx(0.4)
     assert cal.Status == "ok" and guide.shown == "result"
     assert_pose(matrix_of(cal.W), scene.W)
     doc.undo()
@@ -635,7 +636,7 @@ def test_16_a_loose_reference_box_shows_the_points_off_its_model_in_red(doc, vie
     assert page.start() and page.wait(180) == "done", page.last_error
     cal = guide.calibration()
     assert cal.Status == "failed" and any(r.startswith("reference region explained by its model") for r in cal.Reasons)
-    result = co.result_of(cal)
+    result = lookups.result_of(cal)
     off, note = result.regions["reference_off_model"], result.off_model("reference")
     assert np.isin(scene.mat, off).mean() > 0.9
     # The overlay on the scan draws exactly the result's off-model points, larger than the regions'.

@@ -28,9 +28,10 @@ import FreeCADGui  # noqa: E402
 from workcal_wb.core import frames  # noqa: E402
 from workcal_wb.core.toolpath import linearised, read_gcode  # noqa: E402
 from workcal_wb.fc import calibration_object as co  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
 from workcal_wb.fc.placements import matrix_of  # noqa: E402
 from workcal_wb.fc.scan import PARAMS, scan_cloud  # noqa: E402
-from workcal_wb.fc.toolpath import read_toolpath  # noqa: E402
+from workcal_wb.fc.toolpath_input import read_toolpath  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtWidgets, common  # noqa: E402
 
 ROT_TOL_DEG, TRANS_TOL_MM = 0.05, 0.1
@@ -231,7 +232,7 @@ def test_05_result(step, shoot_window, check_page, scan_share):
     assert page.euler.text() == f"{phi:.3f}, {theta:.3f}, {psi:.3f} deg"
     assert page.omega.text() == f"{frames.omega(W):.3f} deg"
     assert "phi, theta, psi" in page.euler.toolTip() and "Omega" in page.omega.toolTip()
-    gates = co.result_of(cal).quality_gates
+    gates = lookups.result_of(cal).quality_gates
     assert page.checks.rowCount() == len(gates) > 5
     assert all(page.checks.item(i, 2).text() == "\u2713" for i in range(len(gates)))
     assert "toolpath" not in page.uncertainty.text() or "mm" in page.uncertainty.text()
@@ -309,7 +310,7 @@ def test_07_toolpath(step, shoot_window, check_page, view_share):
     panel.go("toolpath")
     page = panel.steps["toolpath"]
     gcode = str(step["dir"] / "toolpath.nc")
-    from workcal_wb.gui.commands.toolpath import start_folder
+    from workcal_wb.gui.actions import start_folder
 
     assert os.path.samefile(start_folder(step["doc"]), step["dir"])  # the file dialog opens where the scan lies
     page.use_file(gcode)
@@ -411,7 +412,7 @@ def test_09_the_recorded_macro_replays_headless(step, output_dir):
     script.write_text(
         "import json, FreeCAD\n"
         f"exec(compile(open({str(macro)!r}).read(), {str(macro)!r}, 'exec'))\n"
-        "from workcal_wb.fc.calibration_object import find_calibrations\n"
+        "from workcal_wb.fc.lookups import find_calibrations\n"
         "from workcal_wb.fc.placements import matrix_of\n"
         "[cal] = find_calibrations(FreeCAD.ActiveDocument)\n"
         f"json.dump({{'W': matrix_of(cal.W).tolist(), 'status': cal.Status, 'accepted': cal.Accepted}}, "

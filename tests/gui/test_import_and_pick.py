@@ -19,11 +19,12 @@ from workcal_wb.core.geometry import Cloud  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
 from workcal_wb.core.writers import write_ply, write_xyz  # noqa: E402
+from workcal_wb.fc import lookups  # noqa: E402
 from workcal_wb.fc import scan as fc_scan  # noqa: E402
 from workcal_wb.fc.models import add_model  # noqa: E402
 from workcal_wb.fc import setup as fc_setup  # noqa: E402
-from workcal_wb.gui import region_display  # noqa: E402
-from workcal_wb.gui.commands import import_scan, models, regions  # noqa: E402
+from workcal_wb.gui import actions, region_display  # noqa: E402
+from workcal_wb.gui.commands import regions  # noqa: E402
 from workcal_wb.gui.task_panels import QtCore, QtWidgets  # noqa: E402
 from workcal_wb.gui.view import look  # noqa: E402
 
@@ -58,7 +59,7 @@ def scan_units():
 def imported(doc, scene, scan_units, pump):
     """The scene scan imported through the command's entry point, seen from the scanner."""
     scan_units.SetString("ScanUnits", "mm")
-    (obj,) = import_scan.import_scan_files([str(scene["ply"])])
+    (obj,) = actions.import_scan_files([str(scene["ply"])])
     look_from_scanner()
     pump(0.1)
     return obj
@@ -167,9 +168,9 @@ def doc_state(doc):
 
 def test_import_scan_makes_one_undoable_scan_object(doc, scene, scan_units, shoot, report):
     scan_units.SetString("ScanUnits", "m")  # ignored: this PLY declares its unit (mm)
-    (obj,) = import_scan.import_scan_files([str(scene["ply"])])
+    (obj,) = actions.import_scan_files([str(scene["ply"])])
     points = scene["result"].points
-    assert fc_scan.is_scan(obj) and obj.Label == "car_scene.ply" and obj.Units == "mm"
+    assert lookups.is_scan(obj) and obj.Label == "car_scene.ply" and obj.Units == "mm"
     assert obj.Points.CountPoints == len(points) == obj.PointCount
     np.testing.assert_allclose(fc_scan.scan_cloud(obj).points, points, atol=2e-4)
     assert obj.ViewObject.Proxy.__class__.__name__ == "ViewProviderScan"
@@ -182,7 +183,7 @@ def test_import_scan_makes_one_undoable_scan_object(doc, scene, scan_units, shoo
     doc.undo()
     assert doc.getObject(name) is None and fc_setup.get_setup(doc)["scan"] is None
     doc.redo()
-    assert fc_scan.is_scan(doc.getObject(name)) and fc_setup.get_setup(doc)["scan"] is doc.getObject(name)
+    assert lookups.is_scan(doc.getObject(name)) and fc_setup.get_setup(doc)["scan"] is doc.getObject(name)
 
 
 def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):
@@ -203,7 +204,7 @@ def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):
             QtCore.QTimer.singleShot(50, answer)
 
     QtCore.QTimer.singleShot(50, answer)
-    (obj,) = import_scan.import_scan_files([str(path)])
+    (obj,) = actions.import_scan_files([str(path)])
     assert answered and "unit" in answered[0]
     assert scan_units.GetString("ScanUnits", "") == "m" and obj.Units == "m"
     np.testing.assert_allclose(fc_scan.scan_cloud(obj).points[1], [100, 200, 1300], atol=1e-3)
@@ -214,7 +215,7 @@ def test_units_are_asked_once_and_remembered(doc, scene, scan_units, pump):
                           QtWidgets.QApplication.activeModalWidget().reject())
     guard.start(200)
     try:
-        (again,) = import_scan.import_scan_files([str(path)])
+        (again,) = actions.import_scan_files([str(path)])
     finally:
         guard.stop()
     assert again.Units == "m"
@@ -510,7 +511,7 @@ def test_auto_regions_with_the_wrong_model_names_it(imported, scene, report):
     wrong = doc.addObject("Mesh::Feature", "NotTheReference")
     wrong.Mesh = Mesh.createCylinder(5, 400, True, 1.0, 24)
     doc.recompute()
-    models.choose_models(doc, workpiece=ball, reference=wrong)
+    actions.choose_models(doc, workpiece=ball, reference=wrong)
     state = doc_state(doc)
     FreeCADGui.runCommand("WorkCal_AutoRegions")
     text = report.since()
@@ -527,7 +528,7 @@ def test_non_shape_model_reports_and_changes_nothing(imported, report, pump):
     doc.recompute()
     state = doc_state(doc)
     with pytest.raises(InputError, match=r"'Notes' \(Spreadsheet::Sheet\) is not a Part shape, mesh or point cloud"):
-        models.choose_models(doc, workpiece=sheet)
+        actions.choose_models(doc, workpiece=sheet)
     assert doc_state(doc) == state
     guide = open_guide(doc, "models")
     page = guide.steps["models"]
@@ -548,8 +549,8 @@ def test_bad_scan_file_reports_and_changes_nothing(doc, tmp_path, report, scan_u
     bad.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nend_header\n1\n2\n")
     state = doc_state(doc)
     with pytest.raises(InputError, match="broken.ply"):
-        import_scan.import_scan_files([str(bad)])
-    guarded("Import scan")(import_scan.import_scan_files)([str(bad)])  # as the command runs it
+        actions.import_scan_files([str(bad)])
+    guarded("Import scan")(actions.import_scan_files)([str(bad)])  # as the command runs it
     assert report.since().count("broken.ply") >= 1
     assert doc_state(doc) == state
     assert not any(isinstance(w, QtWidgets.QProgressDialog) and w.isVisible()

@@ -45,7 +45,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from . import frames
-from .refine import MAD_TO_SIGMA
+from .robust import MAD_TO_SIGMA
 from .surface import SurfaceModel
 
 # The six components of a symmetric strain, as (row, column); (0, 1) stands for both (0, 1) and (1, 0).
@@ -64,7 +64,7 @@ STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
 SHOWN_MM = 5.0
 # A scale's information below this share of a shown direction's is rounding: none to free (_strain).
 SCALE_ROUNDING = 1e-9
-# Tukey's biweight: a point weighs nothing beyond this many robust scales (refine.MAD_TO_SIGMA x the median
+# Tukey's biweight: a point weighs nothing beyond this many robust scales (robust.MAD_TO_SIGMA x the median
 # absolute residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
 # side: weighed fully they read as the scan growing (0.05-0.1 % on scans with veils and noise 0.2 mm).
 TUKEY_SCALES = 4.685

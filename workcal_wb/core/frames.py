@@ -145,6 +145,15 @@ def from_rotvec(rotvec_rad, translation=(0.0, 0.0, 0.0)) -> np.ndarray:
     return rigid(Rotation.from_rotvec(rotvec_rad).as_matrix(), translation)
 
 
+def random_motion(rng: np.random.Generator, shift_mm: float = 200.0) -> np.ndarray:
+    """A random rigid motion drawn from ``rng``: a uniformly random rotation and a shift of up to
+    ``shift_mm`` along each axis (the start a benchmark case or a simulated scan is moved by)."""
+    from scipy.spatial.transform import Rotation
+
+    return rigid(Rotation.random(random_state=int(rng.integers(2**31))).as_matrix(),
+                 rng.uniform(-shift_mm, shift_mm, 3))
+
+
 def nearest_rotation(M: np.ndarray) -> np.ndarray:
     """Closest proper rotation to a 3x3 matrix (SVD projection)."""
     U, _, Vt = np.linalg.svd(M)

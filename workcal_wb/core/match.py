@@ -39,11 +39,12 @@ from .global_search import COARSE_VOXELS_PER_DIAGONAL
 from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
 from .errors import InputError
 from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
-from .refine import MAD_TO_SIGMA, coarse_to_fine, refine, refine_exact
+from .refine import coarse_to_fine, refine, refine_exact
 from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
                      NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, RMS, SCAN_NOT_SOLID,
                      SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, WITHIN_TOLERANCE,
                      Candidate, MatchResult, Reason)
+from .robust import MAD_TO_SIGMA
 from .stability import gelfand, stability
 from .surface import SurfaceModel
 

@@ -47,7 +47,7 @@ DTYPES = ("<f8", "<f4", "<i8", "<i4", "|b1")
 GROWTH_CELLS, GROWTH_FRACTION = 5000, 0.2
 # Modules whose source shapes a prepared model (for a model file, also how it is read): their
 # bytes go into every key, so changed code never meets a model prepared by the old one.
-SHAPING_MODULES = ("surface", "symmetry", "pointops", "features", "global_search", "geometry")
+SHAPING_MODULES = ("surface", "symmetry", "robust", "pointops", "features", "global_search", "geometry")
 READING_MODULES = ("readers", "units", "files")
 
 

@@ -23,7 +23,8 @@ import numpy as np
 from . import pointops
 from .frames import from_rotvec
 from .global_search import kabsch_batch
-from .refine import MAD_TO_SIGMA, RefineState, is_small
+from .refine import RefineState, is_small
+from .robust import MAD_TO_SIGMA
 from .surface import SurfaceModel
 
 PAPER_METHODS = ("icp", "hausdorff")

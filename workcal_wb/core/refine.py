@@ -12,11 +12,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .frames import from_rotvec
+from .robust import MAD_TO_SIGMA, gauss_newton_step, geman_mcclure
 from .surface import SurfaceModel
 
-# Median absolute deviation -> standard deviation for Gaussian noise.
-MAD_TO_SIGMA = 1.4826
 # Exact point-to-surface steps at most (each one closest-point query: 4-15 ms for 20k points).
 EXACT_ITERATIONS = 30
 # An offset from the closest surface point that leaves the face normal by more than acos(EDGE_COSINE)
@@ -32,37 +30,6 @@ class RefineState:
     gate: float = float("inf")
     scale: float = float("inf")  # Geman-McClure kernel scale of the last stage (mm)
     stability: dict | None = None  # set when the fit checked its weak motions (edges.centre_on_edges)
-
-
-def gauss_newton_step(points: np.ndarray, normals: np.ndarray, residuals: np.ndarray,
-                      weights: np.ndarray) -> np.ndarray:
-    """One weighted point-to-plane step: the small motion (4x4) that best zeroes the residuals.
-
-    Linearised about the current pose, a rotation w and translation t change residual i by
-    (p_i x n_i) . w + n_i . t; solved in coordinates centred on the points for conditioning.
-    """
-    centre = weights @ points / weights.sum()
-    p = points - centre
-    J = np.empty((len(p), 6))  # [p x n, n], the cross product written out (np.cross is slow on many rows)
-    J[:, 0] = p[:, 1] * normals[:, 2] - p[:, 2] * normals[:, 1]
-    J[:, 1] = p[:, 2] * normals[:, 0] - p[:, 0] * normals[:, 2]
-    J[:, 2] = p[:, 0] * normals[:, 1] - p[:, 1] * normals[:, 0]
-    J[:, 3:] = normals
-    Jw = J * weights[:, None]
-    H = J.T @ Jw
-    g = Jw.T @ residuals
-    try:
-        x = -np.linalg.solve(H + 1e-9 * np.trace(H) * np.eye(6), g)
-    except np.linalg.LinAlgError:
-        return np.eye(4)
-    step = from_rotvec(x[:3])
-    # The rotation acted about `centre`: move it back to the origin.
-    step[:3, 3] = x[3:] + centre - step[:3, :3] @ centre
-    return step
-
-
-def geman_mcclure(residuals: np.ndarray, scale: float) -> np.ndarray:
-    return (scale**2 / (scale**2 + residuals**2)) ** 2
 
 
 def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, scale: float,

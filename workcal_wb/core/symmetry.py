@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import frames
+from .robust import gauss_newton_step, geman_mcclure
 
 # Surface samples a candidate is screened on, refined on, and checked on after refinement.
 SCREEN_POINTS, REFINE_POINTS, CHECK_POINTS = 400, 500, 2000
@@ -131,8 +132,6 @@ class SelfMatch:
     def refined(self, T, reach: float | None = None) -> np.ndarray:
         """T improved by point-to-plane steps of the moved samples against the surface, from samples
         ``reach`` mm off (default: a landed point's), the reach halving each step down to the default."""
-        from .refine import gauss_newton_step, geman_mcclure
-
         reach = self.reach if reach is None else reach
         scale = reach / 2
         for _ in range(REFINE_STEPS):

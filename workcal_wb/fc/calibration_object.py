@@ -30,15 +30,19 @@ from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.match import METHODS
 from workcal_wb.core.result import ERROR, FAILED, OK, CalibrationResult, Reason
 from workcal_wb.fc import inputs as fc_inputs
-from workcal_wb.fc import prefs
+from workcal_wb.fc import placed_model, prefs
+from workcal_wb.fc.lookups import CALIBRATION_TYPE, is_calibration, label, result_of
+from workcal_wb.fc.models import model_cloud
 from workcal_wb.fc.placements import placement
-from workcal_wb.fc.proxies import Feature, add_properties, objects_of, type_of
+from workcal_wb.fc.proxies import Feature, add_properties
+from workcal_wb.fc.scan import scan_cloud
+from workcal_wb.fc.setup import get_setup, toolpath_of
 from workcal_wb.fc.undo import transaction
 
 translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
-TYPE = "WorkCal::Calibration"
+TYPE = CALIBRATION_TYPE
 STATUSES = ["new", "ok", "ambiguous", "failed", "error"]  # error: the inputs could not be calibrated at all
 FRAME_FRACTION = 0.35  # triad axis length as a fraction of the workpiece model's diagonal
 DEFAULT_FRAME_MM = 50.0
@@ -129,23 +133,6 @@ HIDDEN_PROPERTIES = [
 ]
 
 
-def is_calibration(obj) -> bool:
-    return type_of(obj) == TYPE
-
-
-def find_calibrations(doc) -> list:
-    return objects_of(doc, TYPE)
-
-
-def result_of(obj) -> CalibrationResult:
-    """The CalibrationResult stored on a calibration object."""
-    if not is_calibration(obj):
-        raise InputError(f"{fc_inputs.label(obj)}: not a WorkCal calibration")
-    if not obj.ResultJson:
-        raise InputError(f"{obj.Label}: the calibration has not been computed yet")
-    return CalibrationResult.from_text(obj.ResultJson, f"calibration {obj.Label!r}")
-
-
 def toolpath_source(obj):
     """The toolpath a calibration reports its uncertainty at: its Job/Path object, file, or None."""
     return obj.Toolpath if obj.Toolpath is not None else (obj.GcodeFile or None)
@@ -176,9 +163,6 @@ def workpiece_region(obj) -> tuple:
     """(the workpiece's scan points in S, its model X-A as a Cloud, the result) of a calibration: what
     a deviation map and a report compare.  InputError when there is no U to place the model with, no
     recorded region, or the scan no longer has the points the region names."""
-    from workcal_wb.fc.models import model_cloud
-    from workcal_wb.fc.scan import scan_cloud
-
     result = result_of(obj)
     if result.U is None:
         raise InputError(f"{obj.Label}: the workpiece match failed, there is no U to place the model with")
@@ -372,9 +356,6 @@ def make_calibration(doc, scan=None, workpiece=None, reference=None, *, toleranc
     ``progress`` as in core.calibrate.  Bad inputs raise InputError, cancelling raises Cancelled: in
     both cases the document is left as it was.  A calibration whose status is "failed" is still added
     (its reasons tell why; exporters refuse it unless forced)."""
-    from workcal_wb.fc import placed_model
-    from workcal_wb.fc.setup import get_setup, toolpath_of
-
     setup = get_setup(doc)
     scan = scan if scan is not None else setup["scan"]
     workpiece = workpiece if workpiece is not None else setup["workpiece"]
@@ -406,8 +387,6 @@ def update_calibration(obj, *, tolerance_mm=None, method=None, seed=None, resamp
     """Calibrate ``obj`` again with other options (those not given stay; ``scanner_origin`` or ``up``
     None: from the scan's file or the data), in one undo step; returns the new result.  Bad options
     or inputs raise InputError and leave the object as it was."""
-    from workcal_wb.fc import placed_model
-
     doc = obj.Document
     options = fc_inputs.options_from(obj.Tolerance.Value if tolerance_mm is None else tolerance_mm,
                                      method or obj.Method, obj.Seed if seed is None else seed,
@@ -432,7 +411,7 @@ def accept(obj) -> None:
     """Record that someone checked the result and accepts W (one undo step).  Only an "ok" calibration
     can be accepted: an ambiguous or failed one is calibrated again or forced at export."""
     if not is_calibration(obj):
-        raise InputError(f"{fc_inputs.label(obj)}: not a WorkCal calibration")
+        raise InputError(f"{label(obj)}: not a WorkCal calibration")
     if obj.Status != OK:
         raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ok calibration can be accepted "
                          "(calibrate again, or force the export)")

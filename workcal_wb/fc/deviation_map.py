@@ -17,7 +17,8 @@ import FreeCAD
 from workcal_wb.core.deviation import LIMIT_TOLERANCES, DeviationScale, deviation_stats, signed_deviations
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.fc import prefs
-from workcal_wb.fc.calibration_object import is_calibration, workpiece_region
+from workcal_wb.fc.calibration_object import workpiece_region
+from workcal_wb.fc.lookups import is_calibration
 from workcal_wb.fc.proxies import Feature, add_properties, objects_of, type_of
 from workcal_wb.fc.undo import transaction
 

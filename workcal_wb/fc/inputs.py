@@ -20,11 +20,12 @@ from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.result import CalibrationResult
 from workcal_wb.fc import prefs
+from workcal_wb.fc.lookups import label
 from workcal_wb.fc.memo import LastResult
 from workcal_wb.fc.models import model_cloud
 from workcal_wb.fc.prepared_models import KEPT, source_of
 from workcal_wb.fc.scan import get_regions, scan_cloud
-from workcal_wb.fc.toolpath import source_label, toolpath_points
+from workcal_wb.fc.toolpath_input import source_label, toolpath_points
 
 REGION_MODES = list(prefs.REGION_MODES)
 
@@ -59,10 +60,6 @@ class Inputs:
         options = asdict(replace(self.options, blas_threads=None))
         h.update(repr(sorted(options.items())).encode())
         return h.hexdigest()
-
-
-def label(obj) -> str:
-    return getattr(obj, "Label", None) or getattr(obj, "Name", None) or str(obj)
 
 
 def options_from(tolerance_mm=None, method=None, seed=None, resamples=None, scanner_origin=None,

@@ -16,7 +16,7 @@ import FreeCAD
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
-from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.lookups import kernel_of
 from workcal_wb.fc.placements import container_matrix
 
 # Tessellation chord error: a small fraction of the model size, within these bounds (mm).  The
@@ -35,7 +35,7 @@ def _label(obj) -> str:
 
 def kind_of(obj):
     """("mesh"|"points"|"shape"|None, data) without expensive work."""
-    kind, kernel = fc_scan.kernel_of(obj)
+    kind, kernel = kernel_of(obj)
     if kind is not None:
         return kind, kernel
     if hasattr(obj, "Shape") or getattr(obj, "TypeId", "") in ("App::Link", "App::LinkPython", "App::Part"):

@@ -22,6 +22,7 @@ import FreeCAD
 from workcal_wb.core import frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.fc import models
+from workcal_wb.fc.lookups import result_of
 from workcal_wb.fc.placements import container_matrix, matrix_of, placement
 from workcal_wb.fc.proxies import Feature, add_properties, objects_of
 from workcal_wb.fc.undo import transaction
@@ -57,7 +58,6 @@ def candidates(calibration, role: str) -> list:
     (4x4 model -> scan transform, the model symmetry that gives it or None): the calibration's own U
     or V, the rival poses the match found, and the poses the model's symmetries give."""
     from workcal_wb.core.symmetry import turn
-    from workcal_wb.fc.calibration_object import result_of
 
     result = result_of(calibration)
     match = result.workpiece if role == "workpiece" else result.reference
@@ -80,8 +80,6 @@ def candidate_poses(calibration, role: str) -> list:
 
 def pose(calibration, role: str, frame: str, candidate: int = 0) -> np.ndarray:
     """Where the model of ``role`` is drawn (a 4x4 from its document coordinates)."""
-    from workcal_wb.fc.calibration_object import result_of
-
     poses = candidate_poses(calibration, role)
     if not poses:
         raise InputError(f"{calibration.Label}: the {role} match found no pose")
@@ -207,7 +205,6 @@ def tie_breaker(calibration, role: str, candidate: int = 1) -> str:
     that no scan can when the model is symmetric under the turn between them, else where on the model
     the two differ most."""
     from workcal_wb.core.surface import SurfaceModel
-    from workcal_wb.fc.calibration_object import result_of
 
     found = candidates(calibration, role)
     if len(found) <= candidate:

@@ -106,7 +106,7 @@ def off_model(calibration) -> dict:
     placed model: "indices" (scan indices), "count", "where" and "change" (sentences, empty when there
     are none); only the regions it says something of ({} for a calibration not computed, or one that
     matched nothing)."""
-    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.lookups import result_of
 
     if not getattr(calibration, "ResultJson", ""):
         return {}
@@ -122,7 +122,7 @@ def off_model_points(scan) -> dict:
     """{role: scan indices} of the points off their placed models in the latest calibration of ``scan``,
     as the 3D view draws them; a region's are left out when the calibration used picked regions and the
     scan's region no longer holds them all (picked again since), and all when they no longer fit the scan."""
-    from workcal_wb.fc.calibration_object import find_calibrations
+    from workcal_wb.fc.lookups import find_calibrations
 
     calibration = next((c for c in reversed(find_calibrations(scan.Document)) if c.Scan is scan and c.ResultJson),
                        None)

@@ -17,7 +17,8 @@ from workcal_wb.core import report as core_report
 from workcal_wb.core.deviation import DeviationScale
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.fc import prefs
-from workcal_wb.fc.calibration_object import result_of, workpiece_region
+from workcal_wb.fc.calibration_object import workpiece_region
+from workcal_wb.fc.lookups import result_of
 from workcal_wb.fc.scan import scan_cloud
 
 

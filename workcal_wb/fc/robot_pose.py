@@ -93,9 +93,10 @@ def program_reach(calibration, fmt: str | None = None, source=None, *, force: bo
     the check is the same for each.  Refuses as the export would, except that a program the robot
     cannot follow is reported (its report says where it fails) rather than refused."""
     from workcal_wb.core.toolpath.exporters import checked_export
-    from workcal_wb.fc.calibration_object import result_of
+    from workcal_wb.fc.lookups import result_of
     from workcal_wb.fc.setup import toolpath_of
-    from workcal_wb.fc.toolpath import held_to_workpiece, read_source, robot_options
+    from workcal_wb.fc.toolpath import held_to_workpiece, robot_options
+    from workcal_wb.fc.toolpath_input import read_source
 
     settings = {**held_to_workpiece(calibration), **robot_options(**options)}
     if settings.get("robot") is None:

@@ -38,11 +38,13 @@ from workcal_wb.core.readers import read_cloud
 from workcal_wb.core.units import extent_warnings, mm_per_unit
 from workcal_wb.fc.memo import LastResult
 from workcal_wb.fc.placements import matrix_of
-from workcal_wb.fc.proxies import Feature, type_of
+from workcal_wb.fc.lookups import SCAN_TYPE, is_scan, kernel_of
+from workcal_wb.fc.proxies import Feature
+from workcal_wb.fc.setup import set_setup
 from workcal_wb.fc.undo import transaction
 
 PARAMS = "User parameter:BaseApp/Preferences/Mod/WorkCal"
-TYPE = "WorkCal::Scan"
+TYPE = SCAN_TYPE
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 REGION_SOURCES = ["none", "user", "auto"]
 # Region properties, also added to foreign Points/Mesh objects used as scans.
@@ -91,29 +93,6 @@ class ScanFeature(Feature):
             except InputError:  # stale regions: said when they are used
                 pass
             obj.purgeTouched()
-
-
-def is_scan(obj) -> bool:
-    """A WorkCal scan object (made by ``make_scan``)."""
-    return type_of(obj) == TYPE
-
-
-def can_be_scan(obj) -> bool:
-    """An object ``scan_cloud`` accepts: a WorkCal scan, any Points object or a Mesh object (cheap test)."""
-    return kernel_of(obj)[0] is not None
-
-
-def kernel_of(obj):
-    """("points"|"mesh"|None, the object's Points or Mesh kernel), cheaply: nothing is copied."""
-    if obj is None:
-        return None, None
-    pts = getattr(obj, "Points", None)
-    if hasattr(pts, "CountPoints") and hasattr(pts, "Points"):
-        return "points", pts
-    mesh = getattr(obj, "Mesh", None)
-    if hasattr(mesh, "Topology") and hasattr(mesh, "CountFacets"):
-        return "mesh", mesh
-    return None, None
 
 
 def point_count(obj) -> int:
@@ -372,8 +351,6 @@ def import_scan(doc, path, units: str = "mm", name: str | None = None):
     """Read a scan file into ``doc`` as a WorkCal scan and make it the document's scan (WorkCal setup),
     in one undo step; returns the new object.  InputError names the file when it cannot be read; the
     document is then unchanged.  Warnings about the file (e.g. its extent and unit) go to the Report view."""
-    from workcal_wb.fc.setup import set_setup
-
     cloud = read_scan_file(path, units)
     used = declared_units(path) or units
     with transaction(doc, FreeCAD.Qt.translate("WorkCal", "Import scan")):

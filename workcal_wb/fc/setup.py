@@ -14,8 +14,9 @@ import FreeCAD
 
 from workcal_wb.core.errors import InputError
 from workcal_wb.fc import models
-from workcal_wb.fc import scan as fc_scan
+from workcal_wb.fc.lookups import can_be_scan, is_scan
 from workcal_wb.fc.proxies import Feature, add_properties, objects_of
+from workcal_wb.fc.toolpath_input import jobs, read_source
 from workcal_wb.fc.undo import transaction
 
 translate = FreeCAD.Qt.translate
@@ -91,12 +92,12 @@ def check_setup(doc, scan=UNCHANGED, workpiece=UNCHANGED, reference=UNCHANGED) -
     for role, obj in final.items():
         if obj is not None and obj.Document is not doc:
             raise InputError(f"{obj.Label!r} belongs to document {obj.Document.Label!r}, not {doc.Label!r}")
-    if chosen["scan"] is not UNCHANGED and chosen["scan"] is not None and not fc_scan.can_be_scan(chosen["scan"]):
+    if chosen["scan"] is not UNCHANGED and chosen["scan"] is not None and not can_be_scan(chosen["scan"]):
         raise InputError(f"{chosen['scan'].Label!r} is not a point cloud or mesh, so it cannot be the scan")
     for role in ("workpiece", "reference"):
         if chosen[role] is not UNCHANGED and chosen[role] is not None:
             models.check_model(chosen[role])
-            if fc_scan.is_scan(chosen[role]):
+            if is_scan(chosen[role]):
                 raise InputError(f"{chosen[role].Label!r} is the scan; the {role} model must be a model "
                                  "(Part shape, mesh or point cloud of the object itself)")
     if final["workpiece"] is not None and final["workpiece"] is final["reference"]:
@@ -126,8 +127,6 @@ def choose_models(doc, **chosen):
 def toolpath_of(doc):
     """The document's toolpath: the chosen Job/Path object, else the chosen G-code file (a path),
     else the document's only Path/CAM Job; None when there is no such choice."""
-    from workcal_wb.fc.toolpath import jobs
-
     obj = setup_object(doc) if doc is not None else None
     if obj is not None and obj.Toolpath is not None:
         return obj.Toolpath
@@ -141,8 +140,6 @@ def choose_toolpath(doc, source):
     """Remember the document's toolpath (one undo step): a Path/CAM Job or operation of ``doc``, a G-code
     file path, or None to forget it.  The toolpath is read first, so a file or object that is not a
     usable toolpath is refused (InputError) and nothing changes."""
-    from workcal_wb.fc.toolpath import read_source
-
     if source is not None:
         if not isinstance(source, (str, os.PathLike)) and getattr(source, "Document", None) is not doc:
             raise InputError(f"{getattr(source, 'Label', source)!r} is not an object of {doc.Label!r}")

@@ -1,15 +1,12 @@
-"""Toolpaths: FreeCAD Path/CAM Jobs and G-code files in; the calibrated toolpath, robot programs and
-Robot trajectories out.
-
-Reading is duck-typed on what FreeCAD 0.20 (``Path``, ``PathScripts``) and 1.x (``CAM``, ``Path.Main``)
-share: a Job has ``Operations.Group``; an operation or ``Path::Feature`` has ``.Path.Commands``.  So no
-version switch is needed here; only creating Jobs (tests, GUI) has to pick ``PathScripts.PathJob`` or
-``Path.Main.Job``.  FreeCAD stores feeds in mm/s: they are converted to the core's mm/min both ways.
+"""Toolpaths out: the calibrated toolpath, robot programs and Robot trajectories (reading them in, from
+Path/CAM Jobs and G-code files, is toolpath_input.py's).
 
 A *source* is what the setup remembers as the document's toolpath (``fc.setup.toolpath_of``): a Job,
 an operation or Path object, or a G-code file path.  ``make_calibrated_path`` shows it carried into
 the robot base frame B by a calibration's W (a ``Path::FeaturePython`` that follows the calibration),
 ``export_program`` writes it as a robot or CNC program: both go through the same safety checks.
+Creating Jobs (tests, GUI) has to pick ``PathScripts.PathJob`` (FreeCAD 0.20) or ``Path.Main.Job`` (1.x).
+FreeCAD stores feeds in mm/s: they are converted from the core's mm/min.
 """
 from __future__ import annotations
 
@@ -20,35 +17,28 @@ import numpy as np
 import FreeCAD
 import Path
 
-from workcal_wb.core.errors import InputError, MissingDependency
+from workcal_wb.core.errors import MissingDependency
 from workcal_wb.core.result import CalibrationResult
-from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, RAPID, Envelope, ExportOptions, RotaryTable,
-                                      Toolpath, export, format_for, linearised, parse_gcode, read_gcode, transformed)
+from workcal_wb.core.toolpath import (DEFAULT_CHORD_TOL_MM, FORMATS, Envelope, ExportOptions, RotaryTable, Toolpath,
+                                      export, format_for, transformed)
 from workcal_wb.core.toolpath.exporters.common import DEFAULT_RAPID_FEED_MM_MIN, ExportJob, comment_text, robot_path
 from workcal_wb.core.toolpath.gcode import AXES, MOTION_CODE, OFFSET_AXIS, PLANE_OF_AXIS, PLANES, gcode_comment
 from workcal_wb.core.toolpath.model import ARC_CCW, ARC_CW, KINDS
 from workcal_wb.core.toolpath.safety import DEFAULT_PATH_REACH_MM, checked_placement, forced_banner
 from workcal_wb.fc import prefs
+from workcal_wb.fc.lookups import result_of
 from workcal_wb.fc.models import model_cloud
 from workcal_wb.fc.placements import placement
 from workcal_wb.fc.proxies import Feature, add_properties, objects_of, type_of
+from workcal_wb.fc.setup import toolpath_of
+from workcal_wb.fc.toolpath_input import SECONDS_PER_MINUTE, is_job, jobs, read_source, source_label
 from workcal_wb.fc.undo import transaction
 
 translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
-SECONDS_PER_MINUTE = 60.0
 MOTION = ("G0", "G1", "G2", "G3", "G00", "G01", "G02", "G03")
 TYPE = "WorkCal::CalibratedPath"
-
-
-def is_job(obj) -> bool:
-    return hasattr(obj, "Operations") and hasattr(obj.Operations, "Group")
-
-
-def jobs(doc) -> list:
-    """The document's Path/CAM Jobs."""
-    return [o for o in doc.Objects if is_job(o)]
 
 
 def toolpath_sources(doc) -> list:
@@ -59,64 +49,6 @@ def toolpath_sources(doc) -> list:
              and not hasattr(o, "SpindleSpeed")  # tool controllers hold a tool change, not a path
              and any(c.Name in MOTION for c in o.Path.Commands)]
     return jobs(doc) + paths
-
-
-def source_label(source) -> str:
-    return os.path.basename(os.fspath(source)) if isinstance(source, (str, os.PathLike)) else source.Label
-
-
-def read_source(source) -> Toolpath:
-    """A source (Job, Path object or G-code file path) as a Toolpath in the workpiece frame X."""
-    if source is None:
-        raise InputError("no toolpath chosen: choose a Path/CAM Job or a G-code file first")
-    if isinstance(source, (str, os.PathLike)):
-        return read_gcode(os.fspath(source))
-    return read_toolpath(source)
-
-
-def toolpath_points(source) -> np.ndarray:
-    """The cutting points (X, mm) of a source: where the calibration's uncertainty matters."""
-    tp = linearised(read_source(source))
-    cutting = [m.end for m in tp.moves if m.kind != RAPID]
-    points = np.array(cutting) if cutting else tp.points()
-    if len(points) == 0:
-        raise InputError(f"{source_label(source)}: the toolpath has no moves")
-    return points
-
-
-def _paths(obj) -> list:
-    """The objects whose ``Path`` make up ``obj``: a Job's active operations in order, or obj itself."""
-    if is_job(obj):
-        ops = [op for op in obj.Operations.Group if hasattr(op, "Path") and getattr(op, "Active", True)]
-        if not ops:
-            raise InputError(f"Job {obj.Label!r}: no active operation with a path")
-        return ops
-    if hasattr(obj, "Path") and hasattr(obj.Path, "Commands"):
-        return [obj]
-    raise InputError(f"{obj.Label!r} is neither a Path/CAM Job nor an operation or Path object")
-
-
-def _gcode_line(command) -> str:
-    """One command as one line of G-code in mm and mm/min (fixed-point: the reader takes no exponents),
-    a comment's text on one line (comment_text: FreeCAD keeps a comment command's name as given, line
-    breaks and all; it parses any other name into a word and parameters).
-
-    A/B words are read as WorkCal's tool-axis angles (as the G-code exporter writes them); C is refused."""
-    if command.Name.startswith("("):
-        return gcode_comment(comment_text(command.Name[1:-1] if command.Name.endswith(")") else command.Name[1:]))
-    words = [f"{k}{v * SECONDS_PER_MINUTE if k == 'F' else v:.9f}" for k, v in command.Parameters.items()]
-    return " ".join([command.Name] + words)
-
-
-def read_toolpath(obj) -> Toolpath:
-    """The toolpath of a Job (all active operations, modal state carried across) or of one Path object.
-
-    Positions are in the Job's frame, i.e. the workpiece frame X; "line N" in errors is command N."""
-    source = f"{obj.TypeId} {obj.Label!r}"
-    lines = []
-    for op in _paths(obj):
-        lines += [_gcode_line(c) for c in op.Path.Commands]
-    return parse_gcode("\n".join(lines), source=source)
 
 
 def _commands(path: Toolpath) -> list:
@@ -190,8 +122,6 @@ class CalibratedPathFeature(Feature):
         add_properties(obj, PATH_PROPERTIES, read_only=("Calibration", "Forced"))
 
     def execute(self, obj):
-        from workcal_wb.fc.calibration_object import result_of
-
         source = obj.Source if obj.Source is not None else (obj.SourceFile or None)
         path, _ = calibrated_path(read_source(source), result_of(obj.Calibration), force=obj.Forced,
                                   source=f"calibration {obj.Calibration.Label!r}",
@@ -202,9 +132,6 @@ class CalibratedPathFeature(Feature):
 def check_calibrated_path(calibration, source=None, *, force: bool = False) -> bool:
     """Every refusal ``make_calibrated_path`` would raise, without touching the document (the GUI checks
     before it records the command); returns whether it would be forced."""
-    from workcal_wb.fc.calibration_object import result_of
-    from workcal_wb.fc.setup import toolpath_of
-
     source = source if source is not None else toolpath_of(calibration.Document)
     _, forced = calibrated_path(read_source(source), result_of(calibration), force=force,
                                 source=f"calibration {calibration.Label!r}", **held_to_workpiece(calibration))
@@ -223,9 +150,6 @@ def make_calibrated_path(calibration, source=None, *, force: bool = False):
     W, as a new object in one undo step.  Refuses (CalibrationNotOk) a calibration that is not "ok"
     unless ``force`` (the label then says FORCED), and (ExportRefused, InputError) whatever a program
     export would refuse; the document is then unchanged."""
-    from workcal_wb.fc.calibration_object import result_of
-    from workcal_wb.fc.setup import toolpath_of
-
     doc = calibration.Document
     source = source if source is not None else toolpath_of(doc)
     result = result_of(calibration)
@@ -255,8 +179,6 @@ def check_export(calibration, path, fmt: str | None = None, source=None, *, forc
     """Every refusal ``export_program`` would raise (CalibrationNotOk, ToolTilted, ReachRefused,
     ExportRefused, InputError), without writing anything (the GUI checks before it records the export)."""
     from workcal_wb.core.toolpath.exporters import checked_export
-    from workcal_wb.fc.calibration_object import result_of
-    from workcal_wb.fc.setup import toolpath_of
 
     source = source if source is not None else toolpath_of(calibration.Document)
     fmt = fmt or format_for(path)
@@ -286,9 +208,6 @@ def export_program(calibration, path, fmt: str | None = None, source=None, *, fo
     robot's id, a robot file's path or a core.robots.Robot), tool (the TCP in its flange frame: X, Y, Z,
     A, B, C in mm and degrees, or a 4x4), ...).  Nothing is written when the export is refused
     (CalibrationNotOk or ReachRefused unless ``force``, ToolTilted, ExportRefused)."""
-    from workcal_wb.fc.calibration_object import result_of
-    from workcal_wb.fc.setup import toolpath_of
-
     source = source if source is not None else toolpath_of(calibration.Document)
     result = result_of(calibration)
     toolpath = read_source(source)

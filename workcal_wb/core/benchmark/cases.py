@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import frames, pointops
 from ..geometry import Cloud
+from ..simulate.cell import bunny_reference_poses
 
 
 @dataclass
@@ -22,13 +23,6 @@ class Case:
     model: Cloud  # frame X, mm
     truth: np.ndarray  # U = ^S X
     exact: bool  # truth known exactly (simulated) or only to ~0.1 deg (real data reference)
-
-
-def random_motion(rng: np.random.Generator, shift_mm: float = 200.0) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return frames.rigid(Rotation.random(random_state=int(rng.integers(2**31))).as_matrix(),
-                        rng.uniform(-shift_mm, shift_mm, 3))
 
 
 def with_noise_and_count(scan: np.ndarray, rng, count: int = 2000, sigma: float = 0.5) -> np.ndarray:
@@ -106,20 +100,6 @@ BUNNY_SCANS = ("bun000.ply", "bun045.ply", "bun090.ply", "bun180.ply", "bun270.p
 BUNNY_UP = np.array([0.0, 1.0, 0.0])  # the bunny model stands along +y
 
 
-def bunny_reference_poses(folder: Path, conf: str = "bun.conf") -> dict[str, np.ndarray]:
-    """scan -> model transforms from a Stanford .conf file: p_model = R(q)^T p_scan + t (see the
-    data README); the same reading holds for the dragon's dragonStandRight.conf."""
-    from scipy.spatial.transform import Rotation
-
-    poses = {}
-    for line in (folder / conf).read_text().splitlines():
-        fields = line.split()
-        if fields and fields[0] == "bmesh":
-            t = np.array(fields[2:5], float) * 1000.0
-            poses[fields[1]] = frames.rigid(Rotation.from_quat(np.array(fields[5:9], float)).as_matrix().T, t)
-    return poses
-
-
 def bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS) -> list[Case]:
     """Each real scan against bun_zipper.ply, clean and with the four degradations."""
     return list(iter_bunny_cases(folder, seed, scans))
@@ -135,7 +115,7 @@ def iter_bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS):
     poses = bunny_reference_poses(folder)
     for name in scans:
         scan = read_cloud(folder / name, units="m").points
-        motion = random_motion(rng)
+        motion = frames.random_motion(rng)
         truth = motion @ frames.invert(poses[name])  # model -> moved scan
         moved = frames.apply(motion, scan)
         stem = name.removesuffix(".ply")

@@ -17,7 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .run import LARGE_HEADING as HEADING, SUCCESS_DEG, SUCCESS_MM, _in_child, pose_errors
+from .tables import SUCCESS_DEG, SUCCESS_MM, fmt, in_child, pose_errors
+
+HEADING = "## Large scans"
 
 FOLDER = Path(__file__).resolve().parents[3] / "build" / "bench-large"
 SCANS = (("5M", 1), ("20M", 4))  # (name, captures of about 5 million points merged into the file)
@@ -33,7 +35,7 @@ def scan_files(seed: int, names, log) -> tuple[Path, dict]:
     FOLDER.mkdir(parents=True, exist_ok=True)
     model = FOLDER / f"car-seed{seed}.ply"
     if not model.exists():
-        _in_child(_write_model, str(model), seed)
+        in_child(_write_model, str(model), seed)
     scans = {}
     for name, captures in SCANS:
         if name not in names:
@@ -41,7 +43,7 @@ def scan_files(seed: int, names, log) -> tuple[Path, dict]:
         path, truth_file = FOLDER / f"car-{name}-seed{seed}.ply", FOLDER / f"car-{name}-seed{seed}.json"
         if not (path.exists() and truth_file.exists()):
             log(f"large scans: writing the {name} scan into {FOLDER} (once) ...")
-            truth = _in_child(_write_scan, str(path), captures, seed)
+            truth = in_child(_write_scan, str(path), captures, seed)
             truth_file.write_text(json.dumps({"truth": truth.tolist()}))
         scans[name] = (path, np.array(json.loads(truth_file.read_text())["truth"]))
     return model, scans
@@ -122,8 +124,6 @@ def table(rows: list, load: tuple, rounds: int = ROUNDS) -> tuple[str, list]:
     start and the end of the runs."""
     import multiprocessing
 
-    from .run import _fmt
-
     thinned = next((row["thinned"][0] for row in rows if row["thinned"]), None)
     lines = [HEADING, "",
              "Written by `make bench` (or `make bench-large`). `python3 -m workcal_wb match SCAN MODEL --json FILE` "
@@ -146,8 +146,8 @@ def table(rows: list, load: tuple, rounds: int = ROUNDS) -> tuple[str, list]:
               "time (s) | peak memory (MB) |", "|---|---|---|---|---|---|---|---|---|---|"]
     for row in rows:
         lines.append(f"| {row['scan']} | {row['file_points']:,} | {row['file_mb']:.0f} | {row['run']} | "
-                     f"{row['used_points']:,} | {row['status']} | {_fmt(row['rotation_error_deg'], 4)} | "
-                     f"{_fmt(row['displacement_mm'])} | {row['time_s']:.2f} | {row['peak_mb']:.0f} |")
+                     f"{row['used_points']:,} | {row['status']} | {fmt(row['rotation_error_deg'], 4)} | "
+                     f"{fmt(row['displacement_mm'])} | {row['time_s']:.2f} | {row['peak_mb']:.0f} |")
     out = missed(rows)
     lines += ["", f"Targets: the 5M scan matched warm in under {TARGET_5M_S:g} s; every run under "
               f"{TARGET_MB / 1000:g} GB; each pose ok and within {SUCCESS_DEG:g} deg and {SUCCESS_MM:g} mm of the truth. "

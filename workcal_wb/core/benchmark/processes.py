@@ -25,7 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .run import PROCESSES_HEADING as HEADING, SUCCESS_DEG, SUCCESS_MM, pose_errors
+from .tables import SUCCESS_DEG, SUCCESS_MM, in_child, pose_errors
+
+HEADING = "## Whole processes"
 
 ROUNDS = 2
 WARM, COLD = "WorkCal warm", "WorkCal cold"
@@ -149,8 +151,6 @@ def _keep_fastest(best: dict, run: Run) -> None:
 
 def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
     """The demo scene calibrated as a whole process, cold and warm, and in-process with warm models."""
-    from .run import _in_child
-
     scene = folder / "demo"
     subprocess.run([PYTHON, "-m", "workcal_wb", "simulate", "--out", str(scene), "--seed", str(seed), "--lump"],
                    cwd=ROOT, stdout=subprocess.DEVNULL, check=True)  # the scene `make demo` calibrates
@@ -168,7 +168,7 @@ def calibrate_runs(folder: Path, seed: int, quick: bool, log) -> list:
             ok = json.loads((out / "result.json").read_text())["status"] == "ok"
             _keep_fastest(best, Run("calibrate", method, "demo scene", elapsed, peak, ok, cpu))
     # In a fresh process of its own (its memory its own).
-    for run in _in_child(_in_process, scene, cache, seed, 1 if quick else 3):
+    for run in in_child(_in_process, scene, cache, seed, 1 if quick else 3):
         _keep_fastest(best, run)
     return list(best.values())
 

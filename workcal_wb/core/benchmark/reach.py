@@ -22,7 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .run import REACH_HEADING as HEADING
+from .tables import in_child
+
+HEADING = "## Reach check"
 
 POSES = 1_000_000
 ROBOTS = ("kuka_kr16_2", "ur5e")
@@ -110,15 +112,13 @@ def _measure_in_child(robot_id: str, count: int, queue) -> None:
 
 def run(log=print, count: int = POSES) -> tuple[str, list]:
     """The section (Markdown) and the targets missed (none: the table is for reading)."""
-    from .run import _in_child
-
     started = os.getloadavg()[0]
     rows = []
     for robot_id in ROBOTS:
         best = None
         for round_ in range(ROUNDS):
             log(f"benchmark: reach check, {robot_id}, round {round_ + 1} of {ROUNDS} ...")
-            row = _in_child(_measure_in_child, robot_id, count)
+            row = in_child(_measure_in_child, robot_id, count)
             if best is None:
                 best = row
             else:

@@ -22,15 +22,14 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
-from .. import frames, pointops
+from .. import pointops
 from ..atomic import atomic_write_text
+from . import large, processes, reach
 from .scenes import HEADING as SCENES_HEADING, UPRIGHT_L_HEADING
+from .tables import SUCCESS_DEG, SUCCESS_MM, fmt, in_child, pose_errors
 
 WORKCAL, STOCK = "WorkCal", "Open3D stock"
 METHODS = (WORKCAL, STOCK)
-SUCCESS_DEG, SUCCESS_MM = 1.0, 1.0
 # Targets: WorkCal's median time at most this fraction of stock's on the bunny scans; simulated car
 # scans within these errors (medians); WorkCal's peak memory over the cases no higher than stock's.
 TIME_RATIO_TARGET = 0.5
@@ -59,15 +58,6 @@ class Row:
 class Report:
     text: str
     missed: list = field(default_factory=list)  # targets not met, one line each
-
-
-def pose_errors(estimate, truth, model_points) -> tuple[float, float]:
-    """Rotation between estimate and truth (deg) and the largest displacement of a model point (mm)."""
-    if estimate is None:
-        return float("inf"), float("inf")
-    rotation = frames.rotation_between_deg(estimate, truth)
-    displacement = np.linalg.norm(frames.apply(estimate, model_points) - frames.apply(truth, model_points), axis=1)
-    return rotation, float(displacement.max())
 
 
 def bunny_folder(shared: Path | None) -> Path | None:
@@ -175,16 +165,6 @@ def _peak_mb() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def _in_child(target, *args):
-    context = multiprocessing.get_context("spawn")
-    queue = context.Queue()
-    process = context.Process(target=target, args=(*args, queue))
-    process.start()
-    outcome = queue.get()
-    process.join()
-    return outcome
-
-
 def run(shared: Path | None, out: Path, seed: int = 0, quick: bool = False, log=print,
         only: str | None = None, runner=None) -> Report:
     """Run both methods (alternating, ``rounds`` times each), then the other tables, and write the
@@ -222,18 +202,18 @@ def _matcher(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, lis
     per_method = {m: ([], 0.0) for m in METHODS}
     with tempfile.TemporaryDirectory() as folder:
         log("benchmark: making the cases ...")
-        _in_child(_make_cases, shared, seed, quick, Path(folder))
+        in_child(_make_cases, shared, seed, quick, Path(folder))
         for r in range(rounds):
             for method in METHODS:
                 log(f"benchmark: {method}, round {r + 1} of {rounds} ...")
-                rows, peak = _in_child(_run_method, method, Path(folder), seed)
+                rows, peak = in_child(_run_method, method, Path(folder), seed)
                 best, top = per_method[method]
                 if best:  # keep the first round's outcome, the fastest round's time (and least CPU time)
                     for kept, new in zip(best, rows):
                         kept.time_s = min(kept.time_s, new.time_s)
                         kept.cpu_s = min(kept.cpu_s, new.cpu_s)
                 per_method[method] = (best or rows, max(top, peak))
-    gcode = None if quick else _in_child(_run_gcode)
+    gcode = None if quick else in_child(_run_gcode)
     note = None if bunny_folder(shared) else (f"Stanford bunny data not found under {shared}: "
                                               "the bunny cases were skipped.")
     report = _table(per_method, seed, quick, rounds, note, gcode)
@@ -241,11 +221,8 @@ def _matcher(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, lis
 
 
 VERDICTS_HEADING = "## Verdicts"
-PROCESSES_HEADING = "## Whole processes"
-LARGE_HEADING = "## Large scans"
-REACH_HEADING = "## Reach check"
 # After the match table, in this order.
-SECTIONS = (LARGE_HEADING, PROCESSES_HEADING, VERDICTS_HEADING, SCENES_HEADING, UPRIGHT_L_HEADING, REACH_HEADING)
+SECTIONS = (large.HEADING, processes.HEADING, VERDICTS_HEADING, SCENES_HEADING, UPRIGHT_L_HEADING, reach.HEADING)
 
 
 def _with_section(previous: str, section: str) -> str:
@@ -267,8 +244,6 @@ def _with_section(previous: str, section: str) -> str:
 def _processes(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, list]:
     """The whole-process section (see processes.py) and the targets it missed; its files in a temporary
     folder."""
-    from . import processes
-
     log("benchmark: whole processes ...")
     with tempfile.TemporaryDirectory() as folder:
         return processes.run(bunny_folder(shared), seed, quick, Path(folder), log)
@@ -276,15 +251,11 @@ def _processes(shared: Path | None, seed: int, quick: bool, log) -> tuple[str, l
 
 def _large(seed: int, quick: bool, log) -> tuple[str, list]:
     """The large-scan section (see large.py) and the targets it missed; its files kept under build/."""
-    from . import large
-
     return large.run(seed, quick, log)
 
 
 def _reach(log) -> tuple[str, list]:
     """The reach-check section (see reach.py): check_reach on a million poses beside py-opw-kinematics."""
-    from . import reach
-
     return reach.run(log)
 
 
@@ -295,7 +266,7 @@ def _verdicts(shared: Path | None, seed: int, quick: bool, log, runner) -> tuple
     from . import verdicts
 
     log(f"benchmark: verdicts, {runner.describe()} ...")
-    rows = _in_child(_run_verdicts, bunny_folder(shared), seed, 1 if quick else verdicts.VIEWS, runner)
+    rows = in_child(_run_verdicts, bunny_folder(shared), seed, 1 if quick else verdicts.VIEWS, runner)
     section, _ = verdicts.table(rows, seed)
     wrong_ok, _ = verdicts.goals(rows)
     return section, [f"verdicts: {len(wrong_ok)} wrong pose(s) reported ok"] if wrong_ok else []
@@ -307,7 +278,7 @@ def _scenes(shared: Path | None, seed: int, log, runner, upright_l: bool = False
     from . import scenes
 
     log(f"benchmark: {'L-block on its foot' if upright_l else 'scenes'}, {runner.describe()} ...")
-    rows = _in_child(_run_scenes, bunny_folder(shared), seed, runner, upright_l)
+    rows = in_child(_run_scenes, bunny_folder(shared), seed, runner, upright_l)
     if upright_l:
         return scenes.table(rows, seed, runner.describe(), upright_l=True), scenes.goals(rows, None, "L-block on its foot")
     return scenes.table(rows, seed, runner.describe()), scenes.goals(rows)
@@ -324,10 +295,6 @@ def _run_verdicts(bunny, seed: int, views: int, runner, queue) -> None:
     from .verdicts import run as run_verdicts
 
     queue.put(run_verdicts(bunny, seed, log=lambda message: None, views=views, runner=runner))
-
-
-def _fmt(x, digits=3):
-    return "inf" if not np.isfinite(x) else f"{x:.{digits}f}"
 
 
 def _median(values):
@@ -360,8 +327,8 @@ def _summary_rows(per_method: dict) -> tuple[list, dict]:
                      "cpu": _median([r.cpu_s for r in rows])}
             numbers[(key if key is not None else "all", method)] = stats
             lines.append(f"| {label} | {stats['n']} | {stats['points']:,} | {method} | {stats['success']:.0%} | "
-                         f"{_fmt(stats['rot'], 4)} | {_fmt(stats['disp'])} | {_fmt(stats['max_disp'])} | "
-                         f"{stats['time']:.3f} | {stats['ratio']:.2f} | {_fmt(stats['cpu'])} |")
+                         f"{fmt(stats['rot'], 4)} | {fmt(stats['disp'])} | {fmt(stats['max_disp'])} | "
+                         f"{stats['time']:.3f} | {stats['ratio']:.2f} | {fmt(stats['cpu'])} |")
     return lines, numbers
 
 
@@ -466,7 +433,7 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
              "stock rot. err (deg) | stock disp. (mm) | stock time (s) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for ours, stock in zip(per_method[WORKCAL][0], per_method[STOCK][0]):
-        text.append(f"| {ours.case} | {ours.points:,} | {ours.status} | {_fmt(ours.rotation_error_deg, 4)} | "
-                    f"{_fmt(ours.displacement_mm)} | {ours.time_s:.3f} | {_fmt(stock.rotation_error_deg, 4)} | "
-                    f"{_fmt(stock.displacement_mm)} | {stock.time_s:.3f} |")
+        text.append(f"| {ours.case} | {ours.points:,} | {ours.status} | {fmt(ours.rotation_error_deg, 4)} | "
+                    f"{fmt(ours.displacement_mm)} | {ours.time_s:.3f} | {fmt(stock.rotation_error_deg, 4)} | "
+                    f"{fmt(stock.displacement_mm)} | {stock.time_s:.3f} |")
     return Report("\n".join(text) + "\n", missed)

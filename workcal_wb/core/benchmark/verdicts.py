@@ -26,7 +26,8 @@ import numpy as np
 from .. import frames, pointops
 from ..geometry import Cloud
 from ..result import SYMMETRIC
-from .cases import BUNNY_SCANS, bunny_reference_poses, random_motion
+from ..simulate.cell import bunny_reference_poses
+from .cases import BUNNY_SCANS
 from .costs import cost_lines
 
 DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
@@ -88,7 +89,7 @@ def dragon_cases(seed: int, folder: Path = DRAGON_FOLDER, tolerance_mm: float = 
     rng = np.random.default_rng(seed)
     cases = []
     for name, (points, pose) in scans.items():
-        motion = random_motion(rng)
+        motion = frames.random_motion(rng)
         case = f"dragon {name.removesuffix('.ply')}"
         if wanted and case not in wanted:
             continue
@@ -114,7 +115,7 @@ def bunny_verdict_cases(folder: Path | None, seed: int) -> list[VerdictCase]:
     poses = bunny_reference_poses(folder)
     cases = []
     for name in BUNNY_SCANS:
-        motion = random_motion(rng)
+        motion = frames.random_motion(rng)
         scan = frames.apply(motion, read_cloud(folder / name, units="m").points)
         truth = motion @ frames.invert(poses[name])
         stem = name.removesuffix(".ply")
@@ -152,7 +153,7 @@ def simulated_view(mesh: Cloud, rng: np.random.Generator, noise_mm: float, sampl
 
     pose = frames.rigid(Rotation.random(random_state=int(rng.integers(2**31))).as_matrix(), rng.uniform(-200, 200, 3))
     direction, distance, scan_seed = rng.normal(size=3), rng.uniform(400, 900), int(rng.integers(2**31))
-    motion = random_motion(rng)
+    motion = frames.random_motion(rng)
     if not scan:
         return None
     scanned = scan_part(mesh, pose, direction, distance, samples=samples, noise_sigma_mm=noise_mm, z_resolution_mm=0.0,

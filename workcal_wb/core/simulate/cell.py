@@ -172,9 +172,7 @@ def _export_frame(spec: CellSpec, B_S: np.ndarray, rng) -> np.ndarray:
     if spec.frame == "table":  # z up on the table, turned and shifted (a turntable's centre); may lie under it
         F_B = frames.rigid(frames.rot_z(rng.uniform(0, 360)), (*rng.uniform(-200, 200, 2), rng.uniform(-50, 250)))
         return F_B @ frames.invert(PLATFORM_POSE) @ B_S
-    from ..benchmark.cases import random_motion
-
-    return random_motion(rng, shift_mm=1000.0)
+    return frames.random_motion(rng, shift_mm=1000.0)
 
 
 def _platform_seen(points, roles, spec: CellSpec, scan, rng):
@@ -195,10 +193,23 @@ def _platform_seen(points, roles, spec: CellSpec, scan, rng):
     return points[~drop], roles[~drop]
 
 
+def bunny_reference_poses(folder: Path, conf: str = "bun.conf") -> dict[str, np.ndarray]:
+    """scan -> model transforms from a Stanford .conf file: p_model = R(q)^T p_scan + t (see the
+    data README); the same reading holds for the dragon's dragonStandRight.conf."""
+    from scipy.spatial.transform import Rotation
+
+    poses = {}
+    for line in (folder / conf).read_text().splitlines():
+        fields = line.split()
+        if fields and fields[0] == "bmesh":
+            t = np.array(fields[2:5], float) * 1000.0
+            poses[fields[1]] = frames.rigid(Rotation.from_quat(np.array(fields[5:9], float)).as_matrix().T, t)
+    return poses
+
+
 def _bunny(folder: Path | None, spec: CellSpec, rng) -> dict:
     """A real bunny range scan (chosen by the seed) as the workpiece: its points, the pose bun.conf gives
     them, the model, and how the bunny must rest so that its scanner looks from the spec's direction."""
-    from ..benchmark.cases import bunny_reference_poses
     from ..pointops import signed_volume
     from ..readers import read_cloud
 

@@ -15,7 +15,7 @@ class CalibrateCommand(Command):
                                                       "the workpiece and the reference object in the scan (W = V^-1 U)")
 
     def run(self):
-        from workcal_wb.fc.calibration_object import is_calibration
+        from workcal_wb.fc.lookups import is_calibration
         from workcal_wb.gui.commands.guide import open_guide
 
         selected = any(is_calibration(o) for o in selected_objects())

@@ -7,25 +7,17 @@ from __future__ import annotations
 
 import FreeCAD
 
-from workcal_wb.gui.task_panels.common import Command, active_document, show_panel
+from workcal_wb.gui.task_panels.common import Command, active_document
 
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
 
 def open_guide(doc=None, step: str | None = None):
-    """The guide of ``doc`` at ``step`` (default: the next step to do); returns the panel."""
-    import FreeCADGui
-
+    """The guide of ``doc`` (default: the active document) at ``step`` (default: the next step to do);
+    returns the panel."""
     from workcal_wb.gui.task_panels.guide import GuidePanel
 
-    doc = doc or active_document()
-    current = GuidePanel.current
-    if current is not None and current.alive() and FreeCADGui.Control.activeDialog():
-        if current.doc is doc:
-            current.go(step or current.next_step())
-            return current
-        current.close()
-    return show_panel(lambda: GuidePanel(doc, step))
+    return GuidePanel.open(doc or active_document(), step)
 
 
 class GuideCommand(Command):

@@ -19,21 +19,21 @@ translate = FreeCAD.Qt.translate
 
 def target_scan(doc=None):
     """The scan the user means (see the module doc); InputError when there is none."""
-    from workcal_wb.fc import scan as fc_scan
+    from workcal_wb.fc import lookups
     from workcal_wb.fc.setup import get_setup
 
     doc = doc or active_document()
     selected = [o for o in selected_objects() if o.Document is doc]
     for obj in selected:
-        if fc_scan.is_scan(obj):
+        if lookups.is_scan(obj):
             return obj
     chosen = get_setup(doc)["scan"]
     if chosen is not None:
         return chosen
     for obj in selected:
-        if fc_scan.can_be_scan(obj):
+        if lookups.can_be_scan(obj):
             return obj
-    scans = [o for o in doc.Objects if fc_scan.is_scan(o)]
+    scans = [o for o in doc.Objects if lookups.is_scan(o)]
     if len(scans) == 1:
         return scans[0]
     if scans:

@@ -161,7 +161,7 @@ def selected_objects() -> list:
 
 def calibration_for(doc):
     """The calibration the user means: the selected one, or the only/most recent one in the document."""
-    from workcal_wb.fc.calibration_object import find_calibrations, is_calibration
+    from workcal_wb.fc.lookups import find_calibrations, is_calibration
 
     for obj in selected_objects():
         if is_calibration(obj):

@@ -19,7 +19,7 @@ from workcal_wb.fc import proxies
 from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
-from workcal_wb.gui.task_panels.common import close_dialog
+from workcal_wb.gui.task_panels.common import close_dialog, show_panel
 from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, STEPS, TODO
 from workcal_wb.gui.task_panels.steps.base import reveal
 
@@ -127,6 +127,21 @@ class GuidePanel:
         self.refresh()
         self.go(step or self.next_step())
 
+    @classmethod
+    def open(cls, doc, step: str | None = None):
+        """The guide of ``doc`` at ``step`` (default: the next step to do), the open one switched to it;
+        returns the panel.  A step reopens its guide through this (``self.guide.open``) after a panel
+        that took the guide's place closes."""
+        import FreeCADGui
+
+        current = cls.current
+        if current is not None and current.alive() and FreeCADGui.Control.activeDialog():
+            if current.doc is doc:
+                current.go(step or current.next_step())
+                return current
+            current.close()
+        return show_panel(lambda: cls(doc, step))
+
     # ------------------------------------------------------------------ widgets
     def _build(self):
         form = QtWidgets.QWidget()
@@ -182,7 +197,7 @@ class GuidePanel:
 
     def calibration(self):
         """The document's latest calibration of the chosen scan and models (None when there is none)."""
-        from workcal_wb.fc.calibration_object import find_calibrations
+        from workcal_wb.fc.lookups import find_calibrations
 
         setup = get_setup(self.doc)
         for obj in reversed(find_calibrations(self.doc)):

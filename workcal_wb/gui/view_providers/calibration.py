@@ -5,7 +5,8 @@ shows the points off the placed models."""
 import FreeCAD
 
 from workcal_wb.core.errors import WorkCalError
-from workcal_wb.fc.calibration_object import frame_poses, result_of
+from workcal_wb.fc.calibration_object import frame_poses
+from workcal_wb.fc.lookups import result_of
 from workcal_wb.gui.view_providers.base import ViewProvider
 
 translate = FreeCAD.Qt.translate

@@ -227,8 +227,8 @@ class ExportStep(Step):
 
     def default_path(self) -> str:
         from workcal_wb.core.toolpath import FORMATS
-        from workcal_wb.fc.toolpath import source_label
-        from workcal_wb.gui.commands.toolpath import start_folder
+        from workcal_wb.fc.toolpath_input import source_label
+        from workcal_wb.gui.actions import start_folder
 
         source = self.guide.steps["toolpath"].chosen()
         stem = os.path.splitext(source_label(source))[0] if source is not None else "toolpath"
@@ -304,7 +304,7 @@ class ExportStep(Step):
         """The recorded export; the robot's reach it was checked against (a refusal's too) is kept for the
         line on the worst pose and the button that shows the robot there."""
         from workcal_wb.core.toolpath import ReachRefused
-        from workcal_wb.gui.commands.toolpath import export_program
+        from workcal_wb.gui.actions import export_program
 
         try:
             job = export_program(calibration, path, self.fmt(), force=force, **options)
@@ -342,7 +342,7 @@ class ExportStep(Step):
 
     def show_robot(self):
         """The robot of the last check drawn at its worst pose, beside the part (recorded)."""
-        from workcal_wb.gui.commands.toolpath import show_robot_at_worst_pose
+        from workcal_wb.gui.actions import show_robot_at_worst_pose
 
         check, calibration = self.checked, self.guide.calibration()
         if check is None or check["pose"] is None or calibration is None:

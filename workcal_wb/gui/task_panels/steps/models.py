@@ -49,7 +49,7 @@ class ModelsStep(Step):
                                                                                 chosen["reference"].Label)
 
     def refresh(self) -> None:
-        from workcal_wb.gui.commands.models import model_candidates
+        from workcal_wb.gui.actions import model_candidates
 
         chosen = self.setup()
         self.candidates = model_candidates(self.doc)
@@ -63,7 +63,7 @@ class ModelsStep(Step):
 
     def select(self, role: str, obj) -> None:
         """Choose ``obj`` as the model of ``role`` (recorded), as picking it in the list does."""
-        from workcal_wb.gui.commands.models import choose_models
+        from workcal_wb.gui.actions import choose_models
 
         choose_models(self.doc, **{role: obj})
         self.guide.go(self.NAME)
@@ -74,7 +74,7 @@ class ModelsStep(Step):
             self.select(role, self.candidates[index])
 
     def ask_and_import(self, role: str) -> None:
-        from workcal_wb.gui.commands.models import ask_for_model_file
+        from workcal_wb.gui.actions import ask_for_model_file
 
         path = ask_for_model_file()
         if path:
@@ -82,7 +82,7 @@ class ModelsStep(Step):
 
     def load_file(self, role: str, path, units: str | None = None):
         """Read a model file (recorded) and choose it for ``role``."""
-        from workcal_wb.gui.commands.models import import_model
+        from workcal_wb.gui.actions import import_model
 
         obj = self.run_guarded(translate("WorkCal", "Model file"), lambda: import_model(path, self.doc, units, role))
         self.guide.go(self.NAME)

@@ -66,7 +66,7 @@ class RegionsStep(Step):
 
     def _calibration_regions(self) -> dict:
         """The regions the latest calibration found for itself (automatic regions), or {}."""
-        from workcal_wb.fc.calibration_object import result_of
+        from workcal_wb.fc.lookups import result_of
 
         calibration = self.guide.calibration()
         if calibration is None or not calibration.ResultJson:
@@ -93,7 +93,6 @@ class RegionsStep(Step):
 
     def pick(self, shape: str):
         """Hand over to the pick panel (one task panel at a time); the guide comes back when it closes."""
-        from workcal_wb.gui.commands.guide import open_guide
         from workcal_wb.gui.commands.regions import open_pick_panel
 
         doc, scan = self.doc, self.setup()["scan"]
@@ -101,7 +100,7 @@ class RegionsStep(Step):
             return self.run_guarded(translate("WorkCal", "Pick region"), lambda: open_pick_panel(None))
         self.guide.close()
         return self.run_guarded(translate("WorkCal", "Pick region"), lambda: open_pick_panel(
-            scan, shape, on_close=lambda: open_guide(doc, self.NAME)))
+            scan, shape, on_close=lambda: self.guide.open(doc, self.NAME)))
 
     def scene(self) -> Scene:
         scan, found = self._regions()

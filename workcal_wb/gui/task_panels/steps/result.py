@@ -129,7 +129,7 @@ class ResultStep(Step):
 
     # ------------------------------------------------------------------ state
     def result(self):
-        from workcal_wb.fc.calibration_object import result_of
+        from workcal_wb.fc.lookups import result_of
 
         calibration = self.guide.calibration()
         if calibration is None or not calibration.ResultJson:

@@ -38,7 +38,7 @@ class ScanStep(Step):
         return DONE, translate("WorkCal", "{}: {} points").format(scan.Label, f"{count:,}".replace(",", "\u2009"))
 
     def refresh(self) -> None:
-        from workcal_wb.gui.commands.models import scan_candidates
+        from workcal_wb.gui.actions import scan_candidates
 
         scan = self.setup()["scan"]
         units = getattr(scan, "Units", "") if scan is not None else ""
@@ -52,7 +52,7 @@ class ScanStep(Step):
         self.choice.blockSignals(False)
 
     def ask_and_import(self) -> None:
-        from workcal_wb.gui.commands.import_scan import ask_for_scan_files
+        from workcal_wb.gui.actions import ask_for_scan_files
 
         paths = ask_for_scan_files()
         if paths:
@@ -60,7 +60,7 @@ class ScanStep(Step):
 
     def import_files(self, paths, units: str | None = None) -> list:
         """Import scan files (recorded), then show the scan."""
-        from workcal_wb.gui.commands.import_scan import import_scan_files
+        from workcal_wb.gui.actions import import_scan_files
 
         created = self.run_guarded(translate("WorkCal", "Import scan"),
                                    lambda: import_scan_files(paths, units, self.doc)) or []
@@ -68,7 +68,7 @@ class ScanStep(Step):
         return created
 
     def use_chosen(self) -> None:
-        from workcal_wb.gui.commands.models import choose_models
+        from workcal_wb.gui.actions import choose_models
 
         index = self.choice.currentIndex()
         if 0 <= index < len(self.candidates):
@@ -76,7 +76,7 @@ class ScanStep(Step):
             self.guide.go(self.NAME)
 
     def scene(self) -> Scene:
-        from workcal_wb.gui.commands.models import scan_candidates
+        from workcal_wb.gui.actions import scan_candidates
 
         scan = self.setup()["scan"]
         if scan is None:  # none chosen yet: the scans there are to choose from stay in sight

@@ -48,7 +48,7 @@ class ToolpathStep(Step):
         return (calibrated_paths(calibration) or [None])[-1] if calibration is not None else None
 
     def state(self) -> tuple:
-        from workcal_wb.fc.toolpath import source_label
+        from workcal_wb.fc.toolpath_input import source_label
 
         source = self.chosen()
         if source is None:
@@ -58,7 +58,8 @@ class ToolpathStep(Step):
         return DONE, translate("WorkCal", "{}, shown in the robot frame").format(source_label(source))
 
     def refresh(self) -> None:
-        from workcal_wb.fc.toolpath import source_label, toolpath_sources
+        from workcal_wb.fc.toolpath import toolpath_sources
+        from workcal_wb.fc.toolpath_input import source_label
 
         source = self.chosen()
         self.sources = list(toolpath_sources(self.doc))
@@ -75,7 +76,7 @@ class ToolpathStep(Step):
         self.info.setText(self.state()[1])
 
     def use_chosen(self) -> None:
-        from workcal_wb.gui.commands.toolpath import choose_toolpath
+        from workcal_wb.gui.actions import choose_toolpath
 
         index = self.choice.currentIndex()
         if 0 <= index < len(self.sources):
@@ -83,14 +84,14 @@ class ToolpathStep(Step):
             self.guide.go(self.NAME)
 
     def ask_for_file(self) -> None:
-        from workcal_wb.gui.commands.toolpath import ask_for_toolpath_file
+        from workcal_wb.gui.actions import ask_for_toolpath_file
 
         path = ask_for_toolpath_file(self.doc)
         if path:
             self.use_file(path)
 
     def use_file(self, path) -> None:
-        from workcal_wb.gui.commands.toolpath import choose_toolpath
+        from workcal_wb.gui.actions import choose_toolpath
 
         self.run_guarded(translate("WorkCal", "Choose the toolpath"), lambda: choose_toolpath(self.doc, path))
         self.guide.go(self.NAME)
@@ -98,7 +99,7 @@ class ToolpathStep(Step):
     def show_in_robot_frame(self, confirm=None):
         """The calibrated toolpath (recorded; forcing asked for a calibration that is not ok) and the
         workpiece model placed by W beside the reference model."""
-        from workcal_wb.gui.commands.toolpath import transform_toolpath
+        from workcal_wb.gui.actions import transform_toolpath
         from workcal_wb.gui.task_panels.common import with_force
 
         calibration = self.guide.calibration()
