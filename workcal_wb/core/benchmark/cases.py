@@ -23,6 +23,7 @@ class Case:
     model: Cloud  # frame X, mm
     truth: np.ndarray  # U = ^S X
     exact: bool  # truth known exactly (simulated) or only to ~0.1 deg (real data reference)
+    tolerance_mm: float = 0.3  # what the match is told: above the scan's noise
 
 
 def with_noise_and_count(scan: np.ndarray, rng, count: int = 2000, sigma: float = 0.5) -> np.ndarray:
@@ -179,6 +180,26 @@ def _simulated_model_cases(workpiece: str, azimuth: float, seed: int, i: int) ->
         cases.append(Case(f"car #{i} whole scene", "simulated car, whole scene", scan.points, model, scan.U,
                           exact=True))
     return cases
+
+
+DEPTH_CAMERA_GROUP = "depth camera, part on a table"
+DEPTH_CAMERA_TOLERANCE_MM = 2.5
+
+
+def iter_depth_camera_groups(seed: int = 0, quick: bool = False):
+    """Small parts on a table beside a box and a cylinder as a depth camera sees them
+    (simulate.depth_camera: 1-2 mm of noise, coarse and mixed pixels, the table in the crop), one
+    part's views a group, at a tolerance above that noise."""
+    from ..simulate import shapes
+    from ..simulate.depth_camera import depth_camera_scan
+
+    for name, make in (("L-block", shapes.l_block), ("notched plate", shapes.plate), ("curved tile", shapes.shell)):
+        model, cases = make(), []
+        for view in range(1 if quick else 3):
+            scan = depth_camera_scan(model, seed * 1000 + 100 + view)
+            cases.append(Case(f"{name} #{view} on a table", DEPTH_CAMERA_GROUP, scan.points, model, scan.U, exact=True,
+                              tolerance_mm=DEPTH_CAMERA_TOLERANCE_MM))
+        yield cases
 
 
 def zoomed_on_workpiece(scene, azimuth_deg: float, seed: int, elevation_deg: float = 45.0,

@@ -26,6 +26,7 @@ from .. import pointops
 from ..atomic import atomic_write_text
 from . import large, processes, reach
 from .scenes import HEADING as SCENES_HEADING, UPRIGHT_L_HEADING
+from .cases import DEPTH_CAMERA_GROUP, DEPTH_CAMERA_TOLERANCE_MM
 from .tables import SUCCESS_DEG, SUCCESS_MM, fmt, in_child, pose_errors
 
 WORKCAL, STOCK = "WorkCal", "Open3D stock"
@@ -69,13 +70,14 @@ def bunny_folder(shared: Path | None) -> Path | None:
 def build_case_groups(shared: Path | None, seed: int, quick: bool):
     """The bunny cases (when the shared data is there) and the simulated ones, in groups that share one
     model; each group's cases are made when asked for, so _make_cases holds one capture at a time."""
-    from .cases import BUNNY_SCANS, iter_bunny_cases, iter_simulated_groups
+    from .cases import BUNNY_SCANS, iter_bunny_cases, iter_depth_camera_groups, iter_simulated_groups
 
     folder = bunny_folder(shared)
     scans = ("bun000.ply", "bun045.ply") if quick else BUNNY_SCANS
     if folder:
         yield iter_bunny_cases(folder, seed, scans=scans)
     yield from iter_simulated_groups(seed, quick=quick)
+    yield from iter_depth_camera_groups(seed, quick=quick)
 
 
 def _make_cases(shared, seed: int, quick: bool, folder: Path, queue) -> None:
@@ -123,7 +125,7 @@ def _run_method(method: str, folder: Path, seed: int, queue) -> None:
                             else prepare_stock_model(case.model.points, case.model.diagonal()))
             t0, cpu = time.perf_counter(), time.process_time()
             if method == WORKCAL:
-                result = match(Cloud(case.scan, name=case.name), prepared, seed=seed)
+                result = match(Cloud(case.scan, name=case.name), prepared, tolerance_mm=case.tolerance_mm, seed=seed)
                 estimate, status = result.matrix, result.status
             else:
                 estimate, status = stock_open3d(case.scan, prepared), "-"
@@ -347,6 +349,8 @@ def _missed(numbers: dict) -> list:
             if s["ratio"] > TIME_RATIO_TARGET:
                 missed.append(f"bunny scans: WorkCal takes {s['ratio']:.2f} x stock's median time "
                               f"(target {TIME_RATIO_TARGET})")
+        if group == DEPTH_CAMERA_GROUP and s["ratio"] > TIME_RATIO_TARGET:
+            missed.append(f"{group}: WorkCal takes {s['ratio']:.2f} x stock's median time (target {TIME_RATIO_TARGET})")
         if group.startswith("simulated car") and (s["rot"] >= SIMULATED_TARGET[0] or s["disp"] >= SIMULATED_TARGET[1]):
             missed.append(f"{group}: median error {s['rot']:.4f} deg / {s['disp']:.4f} mm (target under "
                           f"{SIMULATED_TARGET[0]} deg / {SIMULATED_TARGET[1]} mm)")
@@ -378,6 +382,10 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
         f"truth) is under {SUCCESS_MM} mm. Errors are against the exact truth for simulated scans and against "
         "`bun.conf` for the Stanford scans, itself only good to about 0.05-0.1 deg (see the data README), so bunny "
         "errors below that say \"found the right pose\", not how accurate it is; the simulated rows measure accuracy. "
+        f"The \"{DEPTH_CAMERA_GROUP}\" rows are small parts (an L-block, a notched plate, a curved tile) on a table "
+        "beside a box and a cylinder as a depth camera sees them (`core/simulate/depth_camera.py`: 1-2 mm of noise, "
+        "1.2-2 mm pixels, mixed pixels at the depth edges, the table and parts of the neighbours in the crop), "
+        f"WorkCal told a {DEPTH_CAMERA_TOLERANCE_MM:g} mm tolerance there (0.3 mm elsewhere). "
         "Disp. columns: the median over the cases of that largest displacement, and the largest over the cases.",
         "",
         "Times are wall-clock seconds per match call, medians over the cases of a row; \"time vs stock\" is that "
@@ -425,7 +433,7 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
     text += table(gcode) if gcode else []
     text += ["## Targets", ""]
     text += [f"- missed: {m}" for m in missed] or ["- all met (see the issue: 100 % bunny success, median error no "
-                                                   "worse than stock, at most half of stock's median time, simulated "
+                                                   "worse than stock, at most half of stock's median time on the bunny and on the depth camera's parts, simulated "
                                                    "car under 0.01 deg and 0.02 mm, peak memory no higher than stock's; the large scans' "
                                                    "targets are in their own section)."]
     text += ["", "## Per case", "",

@@ -27,7 +27,7 @@ from .. import frames, pointops
 from ..geometry import Cloud
 from ..result import SYMMETRIC
 from ..simulate.cell import bunny_reference_poses
-from .cases import BUNNY_SCANS
+from .cases import BUNNY_SCANS, DEPTH_CAMERA_TOLERANCE_MM
 from .costs import cost_lines
 
 DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
@@ -37,8 +37,8 @@ DRAGON_MODEL_VOXEL_MM = 1.5
 # Views per simulated part, and the noise they are drawn with (mm, along the rays).
 VIEWS, NOISE_RANGE_MM = 8, (0.03, 0.2)
 NOISY_MM = 1.5
-# Depth-camera views per part, and the tolerance they are matched at: above their 1-2 mm of noise.
-DEPTH_CAMERA_VIEWS, DEPTH_CAMERA_TOLERANCE_MM = 6, 2.5
+# Depth-camera views per part (matched at cases.DEPTH_CAMERA_TOLERANCE_MM, above their noise).
+DEPTH_CAMERA_VIEWS = 6
 
 
 @dataclass
