@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .. import frames
-from .kinematics import inverse, joint_margins_deg, wrap_into_limits
+from .kinematics import inverse_by_joint, joint_margins_deg, wrap_into_limits
 from .model import Robot
 from .opw import model_angles
 
@@ -183,20 +183,9 @@ def check_reach(robot: Robot, tcp_poses, tool=None, move_kinds=None, source_line
     if kinds.shape != (count,) or lines.shape != (count,):
         raise ValueError(f"move_kinds and source_lines must have one entry per pose ({count})")
     path = _Samples(poses @ frames.invert(tool), kinds, lines)
-    followed = _solved(robot, path.poses)
-    follower = _Follower(robot, path)
-    results = [follower.follow(followed, b) for b in range(len(followed))]
-    choice = _choose(robot, results, path)
-    return _report(robot, path, followed.transpose(2, 0, 1), results, choice)
-
-
-def _solved(robot: Robot, poses: np.ndarray) -> np.ndarray:
-    """(8, 6, M) the joints of every configuration at every pose: one row per joint, so that what is
-    done per configuration runs over contiguous rows (solved in chunks, to hold one copy)."""
-    out = np.empty((8, 6, len(poses)))
-    for start in range(0, len(poses), SOLVE_CHUNK):
-        out[:, :, start:start + SOLVE_CHUNK] = inverse(robot, poses[start:start + SOLVE_CHUNK]).transpose(1, 2, 0)
-    return out
+    followed, branches = _Follower(robot, path).follow()
+    choice = _choose(robot, branches, path)
+    return _report(robot, path, followed.transpose(2, 0, 1), branches, choice)
 
 
 class _Samples:
@@ -247,78 +236,153 @@ class _Samples:
 
 
 @dataclass
-class _Branch:
-    """One configuration followed along the program, per stretch: the first sample where it fails
-    (``len(samples)`` when it does not), how (``_MISSING``, ``_JUMP``, ``_LIMIT``) and its room to the
-    limits before that; per sample whether a joint jumps there."""
+class _Branches:
+    """The eight configurations followed along the program, per configuration and stretch (8, runs): the
+    first sample where it fails (``len(samples)`` when it does not), how (``_MISSING``, ``_JUMP``,
+    ``_LIMIT``, ``_NONE``) and its room to the limits before that."""
 
     fail: np.ndarray
     how: np.ndarray
     room: np.ndarray
-    jump: np.ndarray
 
 
 _MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
 
 
 class _Follower:
+    """Solves the program's samples chunk by chunk and follows the eight configurations along them: each
+    chunk is unwrapped and checked for jumps while it is fresh in the caches, then every stretch is
+    moved by the whole turns that leave the most room to the limits."""
+
     def __init__(self, robot: Robot, path: _Samples):
+        self.robot = robot
         self.low, self.high = robot.limits[:, 0], robot.limits[:, 1]
         self.path = path
         self.allowed = MAX_JOINT_STEP_DEG * np.maximum(path.step, MIN_STEP_SHARE)
+        self.start_of = path.starts[path.run]  # the first sample of every sample's stretch
 
-    def follow(self, followed: np.ndarray, branch: int) -> _Branch:
-        """Follow ``branch`` along the program; its rows of ``followed`` (6, M) become the continuous
-        joints, each stretch moved by the whole turns that leave the most room to the limits."""
+    def follow(self) -> tuple[np.ndarray, _Branches]:
+        """(8, 6, M) the joints of every configuration at every sample, each joint continuous along a
+        stretch and at the turn that leaves the most room to its limits, and what each configuration
+        does per stretch."""
         path, count = self.path, len(self.path)
-        q = followed[branch]
-        missing = np.isnan(q[0])
-        step = np.diff(q, axis=1)
-        unwind = np.round(step / 360.0)
-        unwind *= 360.0
-        unwind[:, path.starts[1:] - 1] = 0.0  # no continuity into a joint move
-        unwind = np.nan_to_num(unwind, copy=False)
-        turns = np.zeros_like(q)
-        np.cumsum(unwind, axis=1, out=turns[:, 1:])
-        if len(path.starts) > 1:
-            turns -= np.repeat(turns[:, path.starts], path.lengths, axis=1)
-        q -= turns
-        step -= unwind
-        np.abs(step, out=step)
-        jump = np.zeros(count, dtype=bool)
-        with np.errstate(invalid="ignore"):
-            jump[1:] = step.max(axis=0) > self.allowed[1:]
-        del step, unwind, turns
+        followed = np.empty((8, 6, count))
+        missing = np.empty((8, count), dtype=bool)
+        jump = np.empty((8, count), dtype=bool)
+        valid = np.empty((8, count), dtype=bool)  # before the stretch's first missing or jumping sample
+        runs = len(path.starts)
+        low = np.full((8, 6, runs), np.nan)  # per stretch, the valid samples' extremes
+        high = np.full((8, 6, runs), np.nan)
+        previous = np.full((8, 6), np.nan)  # the last sample of the chunk before, as solved
+        turns = np.zeros((8, 6))  # the whole turns unwound since the stretch began, at that sample
+        last_bad = np.full(8, -1)  # the last missing or jumping sample so far
+        for start in range(0, count, SOLVE_CHUNK):
+            stop = min(start + SOLVE_CHUNK, count)
+            block = followed[:, :, start:stop]
+            block[...] = inverse_by_joint(self.robot, path.poses[start:stop])
+            previous, turns = self._unwrap(block, start, previous, turns, jump[:, start:stop])
+            np.isnan(block[:, 0], out=missing[:, start:stop])
+            bad = np.where(missing[:, start:stop] | jump[:, start:stop], np.arange(start, stop), -1)
+            np.maximum.accumulate(bad, axis=1, out=bad)
+            np.maximum(bad, last_bad[:, None], out=bad)
+            last_bad = bad[:, -1]
+            np.less(bad, self.start_of[start:stop], out=valid[:, start:stop])
+            self._extremes(block, valid[:, start:stop], start, stop, low, high)
         index = np.arange(count)
-        bad = missing | jump
-        first_bad = np.minimum.reduceat(np.where(bad, index, count), path.starts)
-        valid = index < np.repeat(first_bad, path.lengths)
-        masked = q if valid.all() else np.where(valid, q, np.nan)
+        first_bad = np.minimum.reduceat(np.where(missing | jump, index, count), path.starts, axis=1)
+
         with np.errstate(invalid="ignore"):
-            low = np.fmin.reduceat(masked, path.starts, axis=1)
-            high = np.fmax.reduceat(masked, path.starts, axis=1)
             room = np.minimum(low[..., None] + TURN_SHIFTS_DEG - self.low[:, None, None],
                               self.high[:, None, None] - high[..., None] - TURN_SHIFTS_DEG)
         room = np.nan_to_num(room, nan=-np.inf)
-        best = np.argmax(room, axis=-1)  # (6, runs)
+        best = np.argmax(room, axis=-1)  # (8, 6, runs)
         most = np.take_along_axis(room, best[..., None], axis=-1)[..., 0]
-        cramped = np.flatnonzero((np.isfinite(most) & (most < 0)).any(axis=1))
-        for joint in cramped:  # a joint no whole turn fits: the turn that keeps it inside its limits longest
-            best[joint] = self._longest_inside(masked[joint], joint, room[joint])
+        for branch, joint in np.argwhere((np.isfinite(most) & (most < 0)).any(axis=2)):
+            # a joint no whole turn fits: the turn that keeps it inside its limits longest
+            values = np.where(valid[branch], followed[branch, joint], np.nan)
+            best[branch, joint] = self._longest_inside(values, joint, room[branch, joint])
         shift = TURN_SHIFTS_DEG[best]
-        q += np.repeat(shift, path.lengths, axis=1) if len(path.starts) > 1 else shift
+
+        margin = np.empty((8, count))
+        for start in range(0, count, SOLVE_CHUNK):
+            stop = min(start + SOLVE_CHUNK, count)
+            block = followed[:, :, start:stop]
+            first, last = path.run[start], path.run[stop - 1]
+            if first == last:
+                block += shift[:, :, first, None]
+            else:
+                block += shift[:, :, path.run[start:stop]]
+            with np.errstate(invalid="ignore"):
+                np.minimum(block - self.low[:, None], self.high[:, None] - block).min(axis=1, out=margin[:, start:stop])
         with np.errstate(invalid="ignore"):
-            margin = np.minimum(q - self.low[:, None], self.high[:, None] - q).min(axis=0)
             outside = valid & (margin < 0)
-        first_outside = np.minimum.reduceat(np.where(outside, index, count), path.starts)
+        first_outside = np.minimum.reduceat(np.where(outside, index, count), path.starts, axis=1)
         fail = np.minimum(first_bad, first_outside)
         failed = fail < path.ends
         at = np.minimum(fail, count - 1)
-        how = np.where(~failed, _NONE, np.where(missing[at], _MISSING, np.where(jump[at], _JUMP, _LIMIT)))
+        how = np.where(~failed, _NONE, np.where(np.take_along_axis(missing, at, axis=1), _MISSING,
+                                                np.where(np.take_along_axis(jump, at, axis=1), _JUMP, _LIMIT)))
         with np.errstate(invalid="ignore"):
-            run_room = np.fmin.reduceat(np.where(index < np.repeat(fail, path.lengths), margin, np.nan),
-                                        path.starts)
-        return _Branch(fail, how, run_room, jump)
+            before_fail = index < np.repeat(fail, path.lengths, axis=1)
+            run_room = np.fmin.reduceat(np.where(before_fail, margin, np.nan), path.starts, axis=1)
+        return followed, _Branches(fail, how, run_room)
+
+    def _unwrap(self, block: np.ndarray, start: int, previous: np.ndarray, turns: np.ndarray,
+                jump: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unwinds whole turns between consecutive samples of ``block`` (8, 6, n), the solutions of samples
+        start .. start + n - 1, in place, and sets ``jump`` (8, n) where a joint still turns more than
+        allowed; ``previous`` and ``turns`` carry the sample before (as solved) and the turns unwound in its
+        stretch.  Returns them for the next chunk."""
+        path = self.path
+        stop = start + block.shape[2]
+        step = np.empty_like(block)
+        np.subtract(block[:, :, :1], previous[:, :, None], out=step[:, :, :1])
+        np.subtract(block[:, :, 1:], block[:, :, :-1], out=step[:, :, 1:])
+        last_solved = block[:, :, -1].copy()
+        magnitude = np.abs(step)
+        starts_here = path.starts[(path.starts >= start) & (path.starts < stop)] - start
+        if (magnitude > 180.0).any():  # a joint passes +-180: unwind the turn
+            unwind = np.round(step / 360.0)
+            unwind *= 360.0
+            unwind[:, :, starts_here] = 0.0  # no continuity into a joint move
+            unwind = np.nan_to_num(unwind, copy=False)
+            total = np.cumsum(unwind, axis=2)
+            total += turns[:, :, None]
+            if starts_here.size:  # turns count from the start of each stretch
+                own = self.start_of[start:stop] - start
+                begun = own >= 0
+                total[:, :, begun] -= total[:, :, own[begun]]
+            block -= total
+            step -= unwind
+            np.abs(step, out=magnitude)
+            turns = total[:, :, -1].copy()
+        elif turns.any():
+            if starts_here.size:
+                total = np.broadcast_to(turns[:, :, None], block.shape).copy()
+                total[:, :, starts_here[0]:] = 0.0
+                block -= total
+            else:
+                block -= turns[:, :, None]
+            if starts_here.size:
+                turns = np.zeros_like(turns)
+        with np.errstate(invalid="ignore"):
+            np.greater(magnitude.max(axis=1), self.allowed[start:stop], out=jump)
+        if start == 0:
+            jump[:, 0] = False
+        return last_solved, turns
+
+    def _extremes(self, block: np.ndarray, valid: np.ndarray, start: int, stop: int, low: np.ndarray,
+                  high: np.ndarray) -> None:
+        """Extends ``low`` and ``high`` (8, 6, runs) by the valid samples of ``block`` (8, 6, n) per stretch."""
+        path = self.path
+        masked = block if valid.all() else np.where(valid[:, None], block, np.nan)
+        first = path.run[start]
+        bounds = np.flatnonzero(path.run[start:stop] != np.append(first, path.run[start:stop - 1]))
+        bounds = np.concatenate([[0], bounds])
+        runs = path.run[start + bounds]
+        with np.errstate(invalid="ignore"):
+            low[:, :, runs] = np.fmin(low[:, :, runs], np.fmin.reduceat(masked, bounds, axis=2))
+            high[:, :, runs] = np.fmax(high[:, :, runs], np.fmax.reduceat(masked, bounds, axis=2))
 
     def _longest_inside(self, values: np.ndarray, joint: int, room: np.ndarray) -> np.ndarray:
         """(runs,) index into TURN_SHIFTS_DEG: per stretch, the whole turn after which ``values`` (M,) of
@@ -341,14 +405,14 @@ class _Choice:
     best: int | None  # the configuration that goes furthest in the failed stretch
 
 
-def _choose(robot: Robot, results: list, path: _Samples) -> _Choice:
+def _choose(robot: Robot, branches: _Branches, path: _Samples) -> _Choice:
     """One configuration per stretch: the previous one where it follows the stretch, else (OPW arms)
     the usual posture where it does (``USUAL_ARM``), else the one with the most room to the limits;
     the first stretch none follows stops the choice."""
-    fail = np.stack([r.fail for r in results])  # (8, runs)
-    room = np.nan_to_num(np.stack([r.room for r in results]), nan=-np.inf)
+    fail = branches.fail  # (8, runs)
+    room = np.nan_to_num(branches.room, nan=-np.inf)
     follows = fail >= path.ends
-    usual = (np.arange(len(results)) % 4 == USUAL_ARM) if robot.opw is not None else np.ones(len(results), bool)
+    usual = (np.arange(len(fail)) % 4 == USUAL_ARM) if robot.opw is not None else np.ones(len(fail), bool)
     chosen = np.full(len(path.starts), -1, dtype=np.int64)
     previous = None
     for run in range(len(path.starts)):  # one pass over the stretches between joint moves
@@ -366,7 +430,7 @@ def _choose(robot: Robot, results: list, path: _Samples) -> _Choice:
     return _Choice(chosen, len(path), None, None)
 
 
-def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice) -> ReachReport:
+def _report(robot: Robot, path: _Samples, solutions: np.ndarray, branches: _Branches, choice: _Choice) -> ReachReport:
     stop = choice.stop
     samples = np.arange(stop)
     branch = choice.branch_of_run[path.run[:stop]]
@@ -407,10 +471,10 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
                     if runs[r] >= 0 and runs[r - 1] >= 0 and runs[r] != runs[r - 1])
     problem, reason, problem_at, problem_joint, problem_pose = None, "", None, None, None
     if choice.failed_run is not None:
-        problem, reason, problem_joint = _problem(robot, path, solutions, results, choice)
+        problem, reason, problem_joint = _problem(robot, path, solutions, branches, choice)
         problem_at = path.where(stop)
         past_limit = solutions[stop, choice.best]
-        if results[choice.best].how[choice.failed_run] == _LIMIT and not np.isnan(past_limit).any():
+        if branches.how[choice.best, choice.failed_run] == _LIMIT and not np.isnan(past_limit).any():
             problem_pose = PoseOnPath(problem_at, tuple(float(v) for v in past_limit), past_limit=True)
         elif stop:
             problem_pose = PoseOnPath(path.where(stop - 1), tuple(float(v) for v in joints[stop - 1]))
@@ -422,7 +486,7 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
                        target_joints, target_branch, margin_pose, problem_pose)
 
 
-def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice):
+def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, branches: _Branches, choice: _Choice):
     """(code, reason, joint) for the stretch no configuration follows, at the sample where the
     configuration that goes furthest fails."""
     at, best = choice.stop, choice.best
@@ -435,7 +499,7 @@ def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list,
         return OUT_OF_REACH, (f"{where} is out of the robot's reach: no configuration puts the flange at "
                               f"({x:.1f}, {y:.1f}, {z:.1f}) mm in the robot base frame, "
                               f"{np.linalg.norm(flange[:3, 3]):.0f} mm from its origin"), None
-    how = results[best].how[choice.failed_run]
+    how = branches.how[best, choice.failed_run]
     start = path.where(int(path.starts[choice.failed_run])).text()
     if how == _JUMP:
         turned = np.abs(here[best] - solutions[at - 1, best])
