@@ -31,11 +31,12 @@ def inverse(robot: Robot, poses) -> np.ndarray:
     return opw.solved_in_chunks(lambda chunk: inverse_by_joint(robot, chunk), poses)
 
 
-def inverse_by_joint(robot: Robot, poses: np.ndarray) -> np.ndarray:
+def inverse_by_joint(robot: Robot, poses: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(8, 6, n) for (n, 4, 4) poses: ``inverse`` laid out branch by joint by pose, each joint of each
-    branch one contiguous row (as a caller that works on one joint at a time along a path wants them)."""
+    branch one contiguous row (as a caller that works on one joint at a time along a path wants them),
+    written into ``out`` if given."""
     solver = _solver(robot)
-    return solver.inverse_by_joint(solver.parameters_of(robot), _model_poses(robot, poses))
+    return solver.inverse_by_joint(solver.parameters_of(robot), _model_poses(robot, poses), out)
 
 
 def within_limits(robot: Robot, joints_deg) -> np.ndarray:

@@ -69,6 +69,15 @@ def model_angles(params: OpwParameters, joints_deg) -> np.ndarray:
     return np.radians(joints * np.asarray(params.signs, float) - np.asarray(params.offsets_deg, float))
 
 
+def model_angle(params: OpwParameters, joints_deg, joint: int) -> np.ndarray:
+    """``model_angles(params, joints_deg)[..., joint]``, one joint's model angle in radians, computed alone."""
+    joints = np.asarray(joints_deg, dtype=float)
+    value = joints[..., joint]
+    if joint == 2 and params.j23_factor:
+        value = value + params.j23_factor * joints[..., 1]
+    return np.radians(value * float(params.signs[joint]) - float(params.offsets_deg[joint]))
+
+
 def controller_joints(params: OpwParameters, model_rad) -> np.ndarray:
     """Controller joints in degrees, wrapped into (-180, 180], from model angles in radians."""
     joints = np.degrees(model_rad)
@@ -82,7 +91,9 @@ def controller_joints(params: OpwParameters, model_rad) -> np.ndarray:
 def wrap_degrees(angles, out=None) -> np.ndarray:
     """Angles in degrees mapped into (-180, 180] (into ``out`` if given)."""
     angles = np.asarray(angles, dtype=float)
-    turns = np.ceil((angles - 180.0) / 360.0)
+    turns = np.subtract(angles, 180.0)
+    turns /= 360.0
+    np.ceil(turns, out=turns)
     turns *= 360.0
     return np.subtract(angles, turns, out=out)
 
@@ -136,9 +147,9 @@ def solved_in_chunks(solve, poses) -> np.ndarray:
     return out.reshape(poses.shape[:-2] + (8, 6))
 
 
-def inverse_by_joint(p: OpwParameters, poses: np.ndarray) -> np.ndarray:
+def inverse_by_joint(p: OpwParameters, poses: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(8, 6, n) controller joints in degrees, branch by joint by pose, for (n, 4, 4) model poses: ``inverse``
-    laid out so that each joint of each branch is one contiguous row."""
+    laid out so that each joint of each branch is one contiguous row (written into ``out`` if given)."""
     n = len(poses)
     r00, r01, r02, px, r10, r11, r12, py, r20, r21, r22, pz = poses[:, :3, :].reshape(n, 12).T.copy()
     cx, cy, cz = px - p.c4 * r02, py - p.c4 * r12, pz - p.c4 * r22  # wrist centre
@@ -183,8 +194,9 @@ def inverse_by_joint(p: OpwParameters, poses: np.ndarray) -> np.ndarray:
         w22 = s23 * u02 + c23 * r22
         theta4, theta5, theta6 = _wrist_angles(w00, w01, w02, u10, u11, u12, w22)
 
-    out = np.empty((8, 6, n))
-    model = out.reshape(2, 2, 2, 6, n)  # (wrist 0 or flipped, shoulder, elbow, joint, pose)
+    out = np.empty((8, 6, n)) if out is None else out
+    model = out.view()
+    model.shape = (2, 2, 2, 6, n)  # (wrist 0 or flipped, shoulder, elbow, joint, pose), a view of out
     unflipped, flipped = model[0], model[1]
     unflipped[:, :, 0] = theta1
     unflipped[:, :, 1] = theta2

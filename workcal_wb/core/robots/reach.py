@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from .. import frames
 from .kinematics import inverse_by_joint, joint_margins_deg, wrap_into_limits
 from .model import Robot
-from .opw import model_angles
+from .opw import model_angle
 
 # The move kinds ``check_reach`` takes: at a joint move the controller may change configuration.
 JOINT_MOVE, LINEAR_MOVE = 0, 1
@@ -185,7 +185,7 @@ def check_reach(robot: Robot, tcp_poses, tool=None, move_kinds=None, source_line
     path = _Samples(poses @ frames.invert(tool), kinds, lines)
     followed, branches = _Follower(robot, path).follow()
     choice = _choose(robot, branches, path)
-    return _report(robot, path, followed.transpose(2, 0, 1), branches, choice)
+    return _report(robot, path, followed, branches, choice)
 
 
 class _Samples:
@@ -244,6 +244,7 @@ class _Branches:
     fail: np.ndarray
     how: np.ndarray
     room: np.ndarray
+    margin: np.ndarray  # (8, M) per sample, the joint nearest its limit (deg), as followed
 
 
 _MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
@@ -278,8 +279,7 @@ class _Follower:
         last_bad = np.full(8, -1)  # the last missing or jumping sample so far
         for start in range(0, count, SOLVE_CHUNK):
             stop = min(start + SOLVE_CHUNK, count)
-            block = followed[:, :, start:stop]
-            block[...] = inverse_by_joint(self.robot, path.poses[start:stop])
+            block = inverse_by_joint(self.robot, path.poses[start:stop], out=followed[:, :, start:stop])
             previous, turns = self._unwrap(block, start, previous, turns, jump[:, start:stop])
             np.isnan(block[:, 0], out=missing[:, start:stop])
             bad = np.where(missing[:, start:stop] | jump[:, start:stop], np.arange(start, stop), -1)
@@ -288,8 +288,7 @@ class _Follower:
             last_bad = bad[:, -1]
             np.less(bad, self.start_of[start:stop], out=valid[:, start:stop])
             self._extremes(block, valid[:, start:stop], start, stop, low, high)
-        index = np.arange(count)
-        first_bad = np.minimum.reduceat(np.where(missing | jump, index, count), path.starts, axis=1)
+        first_bad = self._first_in_stretches(missing | jump)
 
         with np.errstate(invalid="ignore"):
             room = np.minimum(low[..., None] + TURN_SHIFTS_DEG - self.low[:, None, None],
@@ -312,20 +311,49 @@ class _Follower:
                 block += shift[:, :, first, None]
             else:
                 block += shift[:, :, path.run[start:stop]]
-            with np.errstate(invalid="ignore"):
-                np.minimum(block - self.low[:, None], self.high[:, None] - block).min(axis=1, out=margin[:, start:stop])
+            self._margins(block, margin[:, start:stop])
         with np.errstate(invalid="ignore"):
-            outside = valid & (margin < 0)
-        first_outside = np.minimum.reduceat(np.where(outside, index, count), path.starts, axis=1)
-        fail = np.minimum(first_bad, first_outside)
+            outside = margin < 0
+        outside &= valid
+        fail = np.minimum(first_bad, self._first_in_stretches(outside))
         failed = fail < path.ends
         at = np.minimum(fail, count - 1)
         how = np.where(~failed, _NONE, np.where(np.take_along_axis(missing, at, axis=1), _MISSING,
                                                 np.where(np.take_along_axis(jump, at, axis=1), _JUMP, _LIMIT)))
+        run_room = np.stack([self._least_before(row, before) for row, before in zip(margin, fail)])
+        return followed, _Branches(fail, how, run_room, margin)
+
+    def _margins(self, block: np.ndarray, out: np.ndarray) -> None:
+        """``out`` (8, n): per configuration and sample of ``block`` (8, 6, n), the smallest distance of any
+        joint to its nearer limit (negative past it, NaN where the configuration is missing)."""
         with np.errstate(invalid="ignore"):
-            before_fail = index < np.repeat(fail, path.lengths, axis=1)
-            run_room = np.fmin.reduceat(np.where(before_fail, margin, np.nan), path.starts, axis=1)
-        return followed, _Branches(fail, how, run_room)
+            np.subtract(block[:, 0], self.low[0], out=out)
+            np.minimum(out, self.high[0] - block[:, 0], out=out)
+            for joint in range(1, 6):
+                np.minimum(out, block[:, joint] - self.low[joint], out=out)
+                np.minimum(out, self.high[joint] - block[:, joint], out=out)
+
+    def _first_in_stretches(self, flags: np.ndarray) -> np.ndarray:
+        """(8, runs) for (8, M) booleans: per row and stretch the first sample that is set (M where none is)."""
+        path, count = self.path, len(self.path)
+        first = np.full((len(flags), len(path.starts)), count)
+        for row, set_in_row in zip(first, flags):
+            hits = np.flatnonzero(set_in_row)
+            if hits.size:
+                at = np.minimum(np.searchsorted(hits, path.starts), hits.size - 1)
+                found = (hits[at] >= path.starts) & (hits[at] < path.ends)
+                row[found] = hits[at[found]]
+        return first
+
+    def _least_before(self, values: np.ndarray, before: np.ndarray) -> np.ndarray:
+        """(runs,) the smallest of ``values`` (M,) per stretch over its samples before ``before`` (runs,),
+        NaN-ignoring (NaN where there is none)."""
+        path = self.path
+        with np.errstate(invalid="ignore"):
+            if len(path.starts) == 1:
+                return np.array([np.fmin.reduce(values[:before[0]]) if before[0] else np.nan])
+            inside = np.arange(len(values)) < np.repeat(before, path.lengths)
+            return np.fmin.reduceat(np.where(inside, values, np.nan), path.starts)
 
     def _unwrap(self, block: np.ndarray, start: int, previous: np.ndarray, turns: np.ndarray,
                 jump: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -430,26 +458,30 @@ def _choose(robot: Robot, branches: _Branches, path: _Samples) -> _Choice:
     return _Choice(chosen, len(path), None, None)
 
 
-def _report(robot: Robot, path: _Samples, solutions: np.ndarray, branches: _Branches, choice: _Choice) -> ReachReport:
+def _report(robot: Robot, path: _Samples, followed: np.ndarray, branches: _Branches, choice: _Choice) -> ReachReport:
+    solutions = followed.transpose(2, 0, 1)  # (M, 8, 6)
     stop = choice.stop
     samples = np.arange(stop)
     branch = choice.branch_of_run[path.run[:stop]]
-    joints = solutions[samples, branch]
+    one = int(branch[0]) if stop and (branch == branch[0]).all() else None  # one configuration all along
+    # (stop, 6) the joints the robot runs at every sample it follows, and each sample's joint margin
+    joints = followed[one, :, :stop].T if one is not None else solutions[samples, branch]
+    margins = branches.margin[one, :stop] if one is not None else branches.margin[branch, samples]
     reached = np.zeros(len(path), dtype=bool)
     reached[:stop] = True
     target_rows = np.flatnonzero(path.at_target & reached)
     count = len(path.kinds)
     target_joints = np.full((count, 6), np.nan)
     target_branch = np.full(count, -1, dtype=np.int8)
-    target_joints[path.owner[target_rows]] = solutions[target_rows, branch[target_rows]]
+    target_joints[path.owner[target_rows]] = joints[target_rows]
     target_branch[path.owner[target_rows]] = branch[target_rows]
 
     margin = wrist = elbow = shoulder = margin_pose = None
     near = []
     if stop:
-        per_joint = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
-        at = int(np.argmin(per_joint.min(axis=1)))
-        margin = Extreme(float(per_joint[at].min()), path.where(at), int(np.argmin(per_joint[at])))
+        at = int(np.argmin(margins))
+        per_joint = np.minimum(joints[at] - robot.limits[:, 0], robot.limits[:, 1] - joints[at])
+        margin = Extreme(float(per_joint.min()), path.where(at), int(np.argmin(per_joint)))
         margin_pose = PoseOnPath(path.where(at), tuple(float(v) for v in joints[at]))
         wrist_deg, elbow_deg = singular_angles(robot, joints)
         shoulder_mm = shoulder_distance(robot, path.poses[:stop])
@@ -592,9 +624,9 @@ def singular_angles(robot: Robot, joints_deg) -> tuple[np.ndarray, np.ndarray]:
     or 180 (axes 4 and 6 in line), the elbow from the arm stretched or folded."""
     joints = np.asarray(joints_deg, dtype=float)
     if robot.opw is not None:
-        theta = np.degrees(model_angles(robot.opw, joints))
-        elbow = theta[..., 2] + np.degrees(np.arctan2(robot.opw.a2, robot.opw.c3))
-        return _from_singular(theta[..., 4]), _from_singular(elbow)
+        wrist = np.degrees(model_angle(robot.opw, joints, 4))
+        elbow = np.degrees(model_angle(robot.opw, joints, 2)) + np.degrees(np.arctan2(robot.opw.a2, robot.opw.c3))
+        return _from_singular(wrist), _from_singular(elbow)
     return _from_singular(joints[..., 4]), _from_singular(joints[..., 2])
 
 

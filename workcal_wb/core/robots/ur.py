@@ -74,9 +74,9 @@ def inverse(robot_or_params, poses) -> np.ndarray:
     return solved_in_chunks(lambda chunk: inverse_by_joint(params, chunk), poses)
 
 
-def inverse_by_joint(p: UrParameters, T: np.ndarray) -> np.ndarray:
+def inverse_by_joint(p: UrParameters, T: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(8, 6, n) joints in degrees, branch by joint by pose, for (n, 4, 4) flange poses: ``inverse`` laid out
-    so that each joint of each branch is one contiguous row."""
+    so that each joint of each branch is one contiguous row (written into ``out`` if given)."""
     n = len(T)
     xx, yx, zx, px, xy, yy, zy, py, xz, yz, zz, pz = T[:, :3, :].reshape(n, 12).T.copy()
     # The origin of joint 5's frame.
@@ -118,8 +118,9 @@ def inverse_by_joint(p: UrParameters, T: np.ndarray) -> np.ndarray:
         q2 = np.arctan2(y, x)[:, :, None] - np.arctan2(p.a3 * np.sin(q3), p.a2 + p.a3 * np.cos(q3))
         q4 = q234 - q2 - q3
 
-    out = np.empty((8, 6, n))
-    joints = out.reshape(2, 2, 2, 6, n)  # (wrist, shoulder, elbow, joint, pose)
+    out = np.empty((8, 6, n)) if out is None else out
+    joints = out.view()
+    joints.shape = (2, 2, 2, 6, n)  # (wrist, shoulder, elbow, joint, pose), a view of out
     joints[:, :, :, 0] = q1[None, :, None]
     joints[:, :, :, 1] = q2
     joints[:, :, :, 2] = q3
