@@ -205,8 +205,8 @@ class _Samples:
         first = np.cumsum(pieces) - pieces
         k = np.arange(len(owner)) - first[owner] + 1
         self.at_target = k == pieces[owner]
-        self.poses = flange[owner]
         inner = np.flatnonzero(~self.at_target)
+        self.poses = flange[owner] if inner.size else flange  # (no sample between targets: no copy)
         if inner.size:
             target = owner[inner]
             share = (k[inner] / pieces[target])[:, None]
@@ -244,10 +244,22 @@ class _Branches:
     fail: np.ndarray
     how: np.ndarray
     room: np.ndarray
-    margin: np.ndarray  # (8, M) per sample, the joint nearest its limit (deg), as followed
 
 
 _MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
+
+
+def least_margin(joints_by_joint: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(..., n) for joints (..., 6, n), one row per joint: the smallest distance in degrees of any joint to
+    its nearer limit (``low``, ``high``: (6,)), negative past it, NaN where the joints are."""
+    rows = np.moveaxis(joints_by_joint, -2, 0)
+    with np.errstate(invalid="ignore"):
+        out = np.subtract(rows[0], low[0])
+        np.minimum(out, high[0] - rows[0], out=out)
+        for joint in range(1, 6):
+            np.minimum(out, rows[joint] - low[joint], out=out)
+            np.minimum(out, high[joint] - rows[joint], out=out)
+    return out
 
 
 class _Follower:
@@ -267,28 +279,22 @@ class _Follower:
         stretch and at the turn that leaves the most room to its limits, and what each configuration
         does per stretch."""
         path, count = self.path, len(self.path)
-        followed = np.empty((8, 6, count))
-        missing = np.empty((8, count), dtype=bool)
-        jump = np.empty((8, count), dtype=bool)
-        valid = np.empty((8, count), dtype=bool)  # before the stretch's first missing or jumping sample
         runs = len(path.starts)
-        low = np.full((8, 6, runs), np.nan)  # per stretch, the valid samples' extremes
+        followed = np.empty((8, 6, count))
+        first_bad = np.full((8, runs), count)  # per stretch, the first sample missing or jumping
+        low = np.full((8, 6, runs), np.nan)  # per stretch, the extremes of the samples before it
         high = np.full((8, 6, runs), np.nan)
         previous = np.full((8, 6), np.nan)  # the last sample of the chunk before, as solved
         turns = np.zeros((8, 6))  # the whole turns unwound since the stretch began, at that sample
-        last_bad = np.full(8, -1)  # the last missing or jumping sample so far
-        for start in range(0, count, SOLVE_CHUNK):
-            stop = min(start + SOLVE_CHUNK, count)
+        for start, stop in self._chunks():
             block = inverse_by_joint(self.robot, path.poses[start:stop], out=followed[:, :, start:stop])
-            previous, turns = self._unwrap(block, start, previous, turns, jump[:, start:stop])
-            np.isnan(block[:, 0], out=missing[:, start:stop])
-            bad = np.where(missing[:, start:stop] | jump[:, start:stop], np.arange(start, stop), -1)
-            np.maximum.accumulate(bad, axis=1, out=bad)
-            np.maximum(bad, last_bad[:, None], out=bad)
-            last_bad = bad[:, -1]
-            np.less(bad, self.start_of[start:stop], out=valid[:, start:stop])
-            self._extremes(block, valid[:, start:stop], start, stop, low, high)
-        first_bad = self._first_in_stretches(missing | jump)
+            jump = np.empty((8, stop - start), dtype=bool)
+            previous, turns = self._unwrap(block, start, previous, turns, jump)
+            bad = np.isnan(block[:, 0])
+            bad |= jump
+            self._note_first(bad, start, first_bad)
+            valid = np.arange(start, stop) < self._per_sample(first_bad, start, stop)
+            self._extend(low, high, block, valid, start, stop)
 
         with np.errstate(invalid="ignore"):
             room = np.minimum(low[..., None] + TURN_SHIFTS_DEG - self.low[:, None, None],
@@ -298,62 +304,74 @@ class _Follower:
         most = np.take_along_axis(room, best[..., None], axis=-1)[..., 0]
         for branch, joint in np.argwhere((np.isfinite(most) & (most < 0)).any(axis=2)):
             # a joint no whole turn fits: the turn that keeps it inside its limits longest
-            values = np.where(valid[branch], followed[branch, joint], np.nan)
+            valid = np.arange(count) < self._per_sample(first_bad[branch], 0, count)
+            values = np.where(valid, followed[branch, joint], np.nan)
             best[branch, joint] = self._longest_inside(values, joint, room[branch, joint])
         shift = TURN_SHIFTS_DEG[best]
 
-        margin = np.empty((8, count))
-        for start in range(0, count, SOLVE_CHUNK):
-            stop = min(start + SOLVE_CHUNK, count)
+        first_outside = np.full((8, runs), count)  # per stretch, the first sample before first_bad past a limit
+        least = np.full((8, 1, runs), np.nan)  # per stretch, the smallest margin before it fails
+        for start, stop in self._chunks():
             block = followed[:, :, start:stop]
-            first, last = path.run[start], path.run[stop - 1]
-            if first == last:
-                block += shift[:, :, first, None]
-            else:
-                block += shift[:, :, path.run[start:stop]]
-            self._margins(block, margin[:, start:stop])
-        with np.errstate(invalid="ignore"):
-            outside = margin < 0
-        outside &= valid
-        fail = np.minimum(first_bad, self._first_in_stretches(outside))
+            block += self._per_sample(shift, start, stop)
+            margin = least_margin(block, self.low, self.high)
+            index = np.arange(start, stop)
+            with np.errstate(invalid="ignore"):
+                outside = margin < 0
+            outside &= index < self._per_sample(first_bad, start, stop)
+            self._note_first(outside, start, first_outside)
+            before_fail = index < self._per_sample(np.minimum(first_bad, first_outside), start, stop)
+            self._extend(least, None, margin[:, None], before_fail, start, stop)
+        fail = np.minimum(first_bad, first_outside)
         failed = fail < path.ends
         at = np.minimum(fail, count - 1)
-        how = np.where(~failed, _NONE, np.where(np.take_along_axis(missing, at, axis=1), _MISSING,
-                                                np.where(np.take_along_axis(jump, at, axis=1), _JUMP, _LIMIT)))
-        run_room = np.stack([self._least_before(row, before) for row, before in zip(margin, fail)])
-        return followed, _Branches(fail, how, run_room, margin)
+        missing = np.isnan(np.take_along_axis(followed[:, 0], at, axis=1))
+        how = np.where(~failed, _NONE, np.where(missing, _MISSING, np.where(at == first_bad, _JUMP, _LIMIT)))
+        return followed, _Branches(fail, how, least[:, 0])
 
-    def _margins(self, block: np.ndarray, out: np.ndarray) -> None:
-        """``out`` (8, n): per configuration and sample of ``block`` (8, 6, n), the smallest distance of any
-        joint to its nearer limit (negative past it, NaN where the configuration is missing)."""
-        with np.errstate(invalid="ignore"):
-            np.subtract(block[:, 0], self.low[0], out=out)
-            np.minimum(out, self.high[0] - block[:, 0], out=out)
-            for joint in range(1, 6):
-                np.minimum(out, block[:, joint] - self.low[joint], out=out)
-                np.minimum(out, self.high[joint] - block[:, joint], out=out)
+    def _chunks(self):
+        """(start, stop) of the chunks of samples solved and followed at a time."""
+        count = len(self.path)
+        return [(start, min(start + SOLVE_CHUNK, count)) for start in range(0, count, SOLVE_CHUNK)]
 
-    def _first_in_stretches(self, flags: np.ndarray) -> np.ndarray:
-        """(8, runs) for (8, M) booleans: per row and stretch the first sample that is set (M where none is)."""
-        path, count = self.path, len(self.path)
-        first = np.full((len(flags), len(path.starts)), count)
+    def _per_sample(self, per_stretch: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """(..., n) or (..., 1) the value of every sample start .. stop - 1 from (..., runs) per stretch."""
+        run = self.path.run
+        if run[start] == run[stop - 1]:
+            return per_stretch[..., run[start], None]
+        return per_stretch[..., run[start:stop]]
+
+    def _note_first(self, flags: np.ndarray, start: int, first: np.ndarray) -> None:
+        """Lowers ``first`` (rows, runs) to the first set sample per row and stretch of ``flags`` (rows, n),
+        the samples start .. start + n - 1 (chunks come in order, so a stretch's first is its earliest)."""
+        run = self.path.run
+        stop = start + flags.shape[-1]
+        if run[start] == run[stop - 1]:  # within one stretch: the first set sample at all
+            stretch = run[start]
+            for row, set_in_row in zip(first, flags):
+                at = int(np.argmax(set_in_row))
+                if set_in_row[at]:
+                    row[stretch] = min(row[stretch], start + at)
+            return
         for row, set_in_row in zip(first, flags):
             hits = np.flatnonzero(set_in_row)
             if hits.size:
-                at = np.minimum(np.searchsorted(hits, path.starts), hits.size - 1)
-                found = (hits[at] >= path.starts) & (hits[at] < path.ends)
-                row[found] = hits[at[found]]
-        return first
+                stretches = run[start + hits]  # ascending
+                earliest = np.flatnonzero(np.diff(stretches, prepend=-1))
+                row[stretches[earliest]] = np.minimum(row[stretches[earliest]], start + hits[earliest])
 
-    def _least_before(self, values: np.ndarray, before: np.ndarray) -> np.ndarray:
-        """(runs,) the smallest of ``values`` (M,) per stretch over its samples before ``before`` (runs,),
-        NaN-ignoring (NaN where there is none)."""
-        path = self.path
+    def _extend(self, low: np.ndarray, high: np.ndarray | None, block: np.ndarray, valid: np.ndarray, start: int,
+                stop: int) -> None:
+        """Extends ``low`` and ``high`` (rows, k, runs) by the valid samples of ``block`` (rows, k, n), the
+        samples start .. stop - 1, per stretch (NaN-ignoring; ``high`` may be None)."""
+        run = self.path.run[start:stop]
+        masked = block if valid.all() else np.where(valid[:, None], block, np.nan)
+        bounds = np.concatenate([[0], np.flatnonzero(run[1:] != run[:-1]) + 1])
+        stretches = run[bounds]
         with np.errstate(invalid="ignore"):
-            if len(path.starts) == 1:
-                return np.array([np.fmin.reduce(values[:before[0]]) if before[0] else np.nan])
-            inside = np.arange(len(values)) < np.repeat(before, path.lengths)
-            return np.fmin.reduceat(np.where(inside, values, np.nan), path.starts)
+            low[:, :, stretches] = np.fmin(low[:, :, stretches], np.fmin.reduceat(masked, bounds, axis=2))
+            if high is not None:
+                high[:, :, stretches] = np.fmax(high[:, :, stretches], np.fmax.reduceat(masked, bounds, axis=2))
 
     def _unwrap(self, block: np.ndarray, start: int, previous: np.ndarray, turns: np.ndarray,
                 jump: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -368,8 +386,9 @@ class _Follower:
         np.subtract(block[:, :, 1:], block[:, :, :-1], out=step[:, :, 1:])
         last_solved = block[:, :, -1].copy()
         magnitude = np.abs(step)
+        largest = magnitude.max(axis=1)  # (8, n): NaN only where the configuration is missing
         starts_here = path.starts[(path.starts >= start) & (path.starts < stop)] - start
-        if (magnitude > 180.0).any():  # a joint passes +-180: unwind the turn
+        if (largest > 180.0).any():  # a joint passes +-180: unwind the turn
             unwind = np.round(step / 360.0)
             unwind *= 360.0
             unwind[:, :, starts_here] = 0.0  # no continuity into a joint move
@@ -383,6 +402,7 @@ class _Follower:
             block -= total
             step -= unwind
             np.abs(step, out=magnitude)
+            magnitude.max(axis=1, out=largest)
             turns = total[:, :, -1].copy()
         elif turns.any():
             if starts_here.size:
@@ -394,34 +414,26 @@ class _Follower:
             if starts_here.size:
                 turns = np.zeros_like(turns)
         with np.errstate(invalid="ignore"):
-            np.greater(magnitude.max(axis=1), self.allowed[start:stop], out=jump)
+            np.greater(largest, self.allowed[start:stop], out=jump)
         if start == 0:
             jump[:, 0] = False
         return last_solved, turns
 
-    def _extremes(self, block: np.ndarray, valid: np.ndarray, start: int, stop: int, low: np.ndarray,
-                  high: np.ndarray) -> None:
-        """Extends ``low`` and ``high`` (8, 6, runs) by the valid samples of ``block`` (8, 6, n) per stretch."""
-        path = self.path
-        masked = block if valid.all() else np.where(valid[:, None], block, np.nan)
-        first = path.run[start]
-        bounds = np.flatnonzero(path.run[start:stop] != np.append(first, path.run[start:stop - 1]))
-        bounds = np.concatenate([[0], bounds])
-        runs = path.run[start + bounds]
-        with np.errstate(invalid="ignore"):
-            low[:, :, runs] = np.fmin(low[:, :, runs], np.fmin.reduceat(masked, bounds, axis=2))
-            high[:, :, runs] = np.fmax(high[:, :, runs], np.fmax.reduceat(masked, bounds, axis=2))
-
     def _longest_inside(self, values: np.ndarray, joint: int, room: np.ndarray) -> np.ndarray:
         """(runs,) index into TURN_SHIFTS_DEG: per stretch, the whole turn after which ``values`` (M,) of
         ``joint`` first leave its limits latest (then the one with the most room)."""
-        path, count = self.path, len(self.path)
-        index = np.arange(count)
-        latest = np.empty((len(path.starts), len(TURN_SHIFTS_DEG)))
+        latest = np.empty((len(self.path.starts), len(TURN_SHIFTS_DEG)))
+        shifted = np.empty_like(values)
+        out, above = np.empty(len(values), dtype=bool), np.empty(len(values), dtype=bool)
         for k, shift in enumerate(TURN_SHIFTS_DEG):  # a handful of turns, each over every sample at once
+            np.add(values, shift, out=shifted)
             with np.errstate(invalid="ignore"):
-                out = (values + shift < self.low[joint]) | (values + shift > self.high[joint])
-            latest[:, k] = np.minimum.reduceat(np.where(out, index, count), path.starts)
+                np.less(shifted, self.low[joint], out=out)
+                np.greater(shifted, self.high[joint], out=above)
+            out |= above
+            first = np.full((1, len(self.path.starts)), len(values))
+            self._note_first(out[None], 0, first)
+            latest[:, k] = first[0]
         return np.lexsort((room, latest), axis=-1)[:, -1]
 
 
@@ -466,7 +478,7 @@ def _report(robot: Robot, path: _Samples, followed: np.ndarray, branches: _Branc
     one = int(branch[0]) if stop and (branch == branch[0]).all() else None  # one configuration all along
     # (stop, 6) the joints the robot runs at every sample it follows, and each sample's joint margin
     joints = followed[one, :, :stop].T if one is not None else solutions[samples, branch]
-    margins = branches.margin[one, :stop] if one is not None else branches.margin[branch, samples]
+    margins = least_margin(joints.T, robot.limits[:, 0], robot.limits[:, 1])
     reached = np.zeros(len(path), dtype=bool)
     reached[:stop] = True
     target_rows = np.flatnonzero(path.at_target & reached)
