@@ -8,8 +8,8 @@ model angle = sign * joint - offset, after the J2/J3 coupling of controllers tha
 = J3 + j23_factor * J2, see model.py).  Poses are the model's end frame (on the flange, z along joint 6,
 out of the flange) in the model's base frame, in mm; joints are the controller's, in degrees.
 
-Everything is vectorised over poses: no Python loop runs per pose (large inputs are cut into chunks only
-to bound memory).
+Everything is vectorised over poses: no Python loop runs per pose (inputs are solved ``CHUNK`` poses at a
+time, each quantity a contiguous row per branch, so that the temporaries stay in the caches).
 
 Branches: ``inverse`` returns eight candidates per pose in a fixed order, as opw_kinematics does::
 

@@ -20,8 +20,9 @@ cannot change configuration, nor unwind a joint by a whole turn, on the way).  `
 * reports the smallest joint-limit margin and how close the path comes to each singularity, with
   the joints (and configuration) at every target for the exporters.
 
-Everything is vectorised over poses; Python loops run over the eight configurations and over the
-stretches between joint moves only.
+Everything is vectorised over poses: the samples are solved and followed a chunk (``SOLVE_CHUNK``) at a
+time, all eight configurations at once, and Python loops run over those chunks and over the stretches
+between joint moves only.
 """
 from __future__ import annotations
 
@@ -59,8 +60,8 @@ SHOULDER_NEAR_MM = 50.0
 # axis 1 and the elbow up, as robots are homed and set up, so the first joint move does not swing the
 # arm over its base or under its elbow.
 USUAL_ARM = 0
-# Poses solved at a time: the inverse kinematics' temporaries (a few MB each) then stay under glibc's
-# mmap threshold and are reused, rather than mapped and faulted in afresh for every chunk.
+# Samples solved and followed at a time: a chunk's joints (3 MB) are unwrapped while still in the caches,
+# and the temporaries stay under glibc's mmap threshold and are reused rather than faulted in afresh.
 SOLVE_CHUNK = 1 << 13
 # Whole turns tried when a joint is moved into its limits: no robot joint spans more than +-540 deg.
 TURN_SHIFTS_DEG = 360.0 * np.arange(-2, 3)
@@ -249,9 +250,9 @@ class _Branches:
 _MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
 
 
-def least_margin(joints_by_joint: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+def _least_margin(joints_by_joint: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(..., n) for joints (..., 6, n), one row per joint: the smallest distance in degrees of any joint to
-    its nearer limit (``low``, ``high``: (6,)), negative past it, NaN where the joints are."""
+    its nearer limit (``low``, ``high``: (6,)), negative past it, NaN where the joints are NaN."""
     rows = np.moveaxis(joints_by_joint, -2, 0)
     with np.errstate(invalid="ignore"):
         out = np.subtract(rows[0], low[0])
@@ -314,7 +315,7 @@ class _Follower:
         for start, stop in self._chunks():
             block = followed[:, :, start:stop]
             block += self._per_sample(shift, start, stop)
-            margin = least_margin(block, self.low, self.high)
+            margin = _least_margin(block, self.low, self.high)
             index = np.arange(start, stop)
             with np.errstate(invalid="ignore"):
                 outside = margin < 0
@@ -478,7 +479,7 @@ def _report(robot: Robot, path: _Samples, followed: np.ndarray, branches: _Branc
     one = int(branch[0]) if stop and (branch == branch[0]).all() else None  # one configuration all along
     # (stop, 6) the joints the robot runs at every sample it follows, and each sample's joint margin
     joints = followed[one, :, :stop].T if one is not None else solutions[samples, branch]
-    margins = least_margin(joints.T, robot.limits[:, 0], robot.limits[:, 1])
+    margins = _least_margin(joints.T, robot.limits[:, 0], robot.limits[:, 1])
     reached = np.zeros(len(path), dtype=bool)
     reached[:stop] = True
     target_rows = np.flatnonzero(path.at_target & reached)
