@@ -6,9 +6,13 @@ FREECAD_HOME  := $(BUILD)/freecad-home
 DEMO_DIR      := $(BUILD)/demo
 DEB_PACKAGES  := freecad python3-numpy python3-scipy python3-open3d python3-matplotlib python3-pytest \
                  python3-hypothesis python3-pip python3-distributed xvfb xauth libgl1-mesa-dri
+# The test peers' folder for this Python (see test-peers), told to the tests and the benchmark, which
+# otherwise look under this checkout's build/: the other-Debian chroot builds elsewhere (BUILD=...).
+PYTAG         := $(shell $(PYTHON) -c 'import sys; print(f"py{sys.version_info[0]}{sys.version_info[1]}")')
+PEERS_ENV     := WORKCAL_TEST_PEERS=$(BUILD)/test-peers/$(PYTAG)
 # Tests never touch the user's FreeCAD settings: a throw-away home with this checkout linked into Mod/.
 FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1 WORKCAL_TEST_OUTPUT=$(BUILD)/test-output \
-                 WORKCAL_REQUIRE_PYE57=1
+                 WORKCAL_REQUIRE_PYE57=1 $(PEERS_ENV)
 # The first X display number tried: the other-Debian chroot shares the network namespace (X's abstract
 # sockets) but not /tmp (its lock files), so it starts elsewhere and both suites can run at once.
 XVFB_DISPLAY  ?= 99
@@ -53,7 +57,6 @@ fuzz: setup
 
 # An independent solver the robot kinematics tests check ours against (tests only, never a runtime
 # dependency), one folder per Python (the chroot's other Debian has another); without network it skips.
-PYTAG         := $(shell $(PYTHON) -c 'import sys; print(f"py{sys.version_info[0]}{sys.version_info[1]}")')
 test-peers: setup
 	@[ -d $(BUILD)/test-peers/$(PYTAG)/py_opw_kinematics ] || $(PYTHON) -m pip install --quiet --root-user-action=ignore --no-deps \
 	    --target $(BUILD)/test-peers/$(PYTAG) py-opw-kinematics || echo "WorkCal: py-opw-kinematics not installed: its cross-checks skip"
@@ -65,7 +68,7 @@ peers: setup
 	    kiss-matcher small-gicp
 
 bench: setup peers
-	$(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
+	$(PEERS_ENV) $(PYTHON) -m workcal_wb bench --out $(CURDIR)/docs/benchmarks.md
 
 # Only the whole-process table (match and calibrate as processes, cold and warm, beside the peers).
 bench-processes: setup peers
@@ -93,7 +96,7 @@ bench-lblock: setup
 
 # Only the reach-check table (check_reach on a million poses beside py-opw-kinematics), replacing its section.
 bench-reach: setup test-peers
-	$(PYTHON) -m workcal_wb bench --only reach --out $(CURDIR)/docs/benchmarks.md
+	$(PEERS_ENV) $(PYTHON) -m workcal_wb bench --only reach --out $(CURDIR)/docs/benchmarks.md
 
 # Never while the other-Debian chroot has /dev or /sys mounted: rm would reach through the mounts.
 clean:

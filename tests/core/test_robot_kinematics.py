@@ -389,7 +389,7 @@ def test_kr6_matches_the_ros_industrial_urdf_chain():
 
 def _py_opw_kinematics():
     """The Rust-backed solver's compiled core (KinematicModel, Robot with forward/batch_forward/reach), as the
-    benchmark finds it (build/test-peers/pyXY, where `make test` puts it), or a skip."""
+    benchmark finds it (where `make test` puts it: $WORKCAL_TEST_PEERS, else build/test-peers/pyXY), or a skip."""
     module = py_opw_kinematics()
     if module is None:
         pytest.skip("py-opw-kinematics is not installed for this Python (make test-peers)")

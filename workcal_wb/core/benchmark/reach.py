@@ -6,8 +6,9 @@ The poses are the forward kinematics of a smooth joint path (every pose reachabl
 clear of singularities), the TCP 150 mm out along the flange's z, one linear move after another a few
 tenths of a millimetre long, as a finishing raster gives them.  Each robot is measured in a process of
 its own, ``ROUNDS`` times; the table keeps the fastest round.  py-opw-kinematics (Rust, a test and
-benchmark peer, never a runtime dependency) is looked for where ``make test`` puts it
-(build/test-peers/pyXY), then in build/peers and on sys.path; without it its columns say so.
+benchmark peer, never a runtime dependency) is looked for where ``make test`` puts it ($WORKCAL_TEST_PEERS,
+which make sets to its build folder's test-peers/pyXY, else build/test-peers/pyXY in this checkout), then in
+build/peers and on sys.path; without it its columns say so.
 """
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ ROBOTS = ("kuka_kr16_2", "ur5e")
 ROUNDS = 2
 TOOL_Z_MM = 150.0
 ROOT = Path(__file__).resolve().parents[3]
+# The environment variable through which make tells where it installed the test peers for this Python
+# (its BUILD folder need not be this checkout's build/, as in the other-Debian chroot).
+TEST_PEERS_VARIABLE = "WORKCAL_TEST_PEERS"
 
 
 def trajectory(robot, count: int = POSES) -> np.ndarray:
@@ -54,10 +58,12 @@ def trajectory(robot, count: int = POSES) -> np.ndarray:
 
 def py_opw_kinematics():
     """py-opw-kinematics' compiled module, or None: a build for this Python where ``make test`` or
-    ``make bench`` installs it, else an importable one."""
+    ``make bench`` installs it (``TEST_PEERS_VARIABLE`` names that folder when make runs us), else an
+    importable one."""
     tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
     suffixes = [s for s in importlib.machinery.EXTENSION_SUFFIXES if s != ".so"]
-    for folder in (ROOT / "build" / "test-peers" / tag, ROOT / "build" / "peers", *map(Path, sys.path)):
+    told = [Path(os.environ[TEST_PEERS_VARIABLE])] if os.environ.get(TEST_PEERS_VARIABLE) else []
+    for folder in (*told, ROOT / "build" / "test-peers" / tag, ROOT / "build" / "peers", *map(Path, sys.path)):
         found = [so for so in glob.glob(str(folder / "py_opw_kinematics" / "_internal*"))
                  if any(so.endswith(s) for s in suffixes)]
         if found:

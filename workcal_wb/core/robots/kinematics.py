@@ -28,11 +28,15 @@ def forward(robot: Robot, joints_deg) -> np.ndarray:
 def inverse(robot: Robot, poses) -> np.ndarray:
     """(..., 8, 6) controller joints (degrees) for (..., 4, 4) controller flange poses in the controller
     base frame; NaN rows are branches that cannot reach the pose."""
-    poses = np.asarray(poses, dtype=float)
-    if poses.shape[-2:] != (4, 4):
-        raise ValueError(f"poses must have shape (..., 4, 4), got {poses.shape}")
-    model_pose = robot.base_transform @ poses @ frames.invert(robot.flange_transform)
-    return _solver(robot).inverse(robot, model_pose)
+    return opw.solved_in_chunks(lambda chunk: inverse_by_joint(robot, chunk), poses)
+
+
+def inverse_by_joint(robot: Robot, poses: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """(8, 6, n) for (n, 4, 4) poses: ``inverse`` laid out branch by joint by pose, each joint of each
+    branch one contiguous row (as a caller that works on one joint at a time along a path wants them),
+    written into ``out`` if given."""
+    solver = _solver(robot)
+    return solver.inverse_by_joint(solver.parameters_of(robot), _model_poses(robot, poses), out)
 
 
 def within_limits(robot: Robot, joints_deg) -> np.ndarray:
@@ -95,6 +99,15 @@ def wrap_into_limits(robot: Robot, joints_deg, reference_deg=0.0) -> np.ndarray:
     chosen = np.take_along_axis(candidates, best, axis=-1)[..., 0]
     chosen[np.isnan(chosen).any(axis=-1)] = np.nan
     return chosen
+
+
+def _model_poses(robot: Robot, poses: np.ndarray) -> np.ndarray:
+    """The model's end frame in the model's base frame for controller flange poses (..., 4, 4)."""
+    if not np.array_equal(robot.base_transform, np.eye(4)):
+        poses = robot.base_transform @ poses
+    if not np.array_equal(robot.flange_transform, np.eye(4)):
+        poses = poses @ frames.invert(robot.flange_transform)
+    return poses
 
 
 def _solver(robot: Robot):

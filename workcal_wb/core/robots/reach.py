@@ -20,8 +20,9 @@ cannot change configuration, nor unwind a joint by a whole turn, on the way).  `
 * reports the smallest joint-limit margin and how close the path comes to each singularity, with
   the joints (and configuration) at every target for the exporters.
 
-Everything is vectorised over poses; Python loops run over the eight configurations and over the
-stretches between joint moves only.
+Everything is vectorised over poses: the samples are solved and followed a chunk (``SOLVE_CHUNK``) at a
+time, all eight configurations at once, and Python loops run over those chunks and over the stretches
+between joint moves only.
 """
 from __future__ import annotations
 
@@ -31,9 +32,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .. import frames
-from .kinematics import inverse, joint_margins_deg, wrap_into_limits
+from .kinematics import inverse_by_joint, joint_margins_deg, wrap_into_limits
 from .model import Robot
-from .opw import model_angles
+from .opw import model_angle
 
 # The move kinds ``check_reach`` takes: at a joint move the controller may change configuration.
 JOINT_MOVE, LINEAR_MOVE = 0, 1
@@ -59,8 +60,8 @@ SHOULDER_NEAR_MM = 50.0
 # axis 1 and the elbow up, as robots are homed and set up, so the first joint move does not swing the
 # arm over its base or under its elbow.
 USUAL_ARM = 0
-# Poses solved at a time: the inverse kinematics' temporaries (a few MB each) then stay under glibc's
-# mmap threshold and are reused, rather than mapped and faulted in afresh for every chunk.
+# Samples solved and followed at a time: a chunk's joints (3 MB) are unwrapped while still in the caches,
+# and the temporaries stay under glibc's mmap threshold and are reused rather than faulted in afresh.
 SOLVE_CHUNK = 1 << 13
 # Whole turns tried when a joint is moved into its limits: no robot joint spans more than +-540 deg.
 TURN_SHIFTS_DEG = 360.0 * np.arange(-2, 3)
@@ -183,20 +184,9 @@ def check_reach(robot: Robot, tcp_poses, tool=None, move_kinds=None, source_line
     if kinds.shape != (count,) or lines.shape != (count,):
         raise ValueError(f"move_kinds and source_lines must have one entry per pose ({count})")
     path = _Samples(poses @ frames.invert(tool), kinds, lines)
-    followed = _solved(robot, path.poses)
-    follower = _Follower(robot, path)
-    results = [follower.follow(followed, b) for b in range(len(followed))]
-    choice = _choose(robot, results, path)
-    return _report(robot, path, followed.transpose(2, 0, 1), results, choice)
-
-
-def _solved(robot: Robot, poses: np.ndarray) -> np.ndarray:
-    """(8, 6, M) the joints of every configuration at every pose: one row per joint, so that what is
-    done per configuration runs over contiguous rows (solved in chunks, to hold one copy)."""
-    out = np.empty((8, 6, len(poses)))
-    for start in range(0, len(poses), SOLVE_CHUNK):
-        out[:, :, start:start + SOLVE_CHUNK] = inverse(robot, poses[start:start + SOLVE_CHUNK]).transpose(1, 2, 0)
-    return out
+    followed, branches = _Follower(robot, path).follow()
+    choice = _choose(robot, branches, path)
+    return _report(robot, path, followed, branches, choice)
 
 
 class _Samples:
@@ -216,8 +206,8 @@ class _Samples:
         first = np.cumsum(pieces) - pieces
         k = np.arange(len(owner)) - first[owner] + 1
         self.at_target = k == pieces[owner]
-        self.poses = flange[owner]
         inner = np.flatnonzero(~self.at_target)
+        self.poses = flange[owner] if inner.size else flange  # (no sample between targets: no copy)
         if inner.size:
             target = owner[inner]
             share = (k[inner] / pieces[target])[:, None]
@@ -247,89 +237,204 @@ class _Samples:
 
 
 @dataclass
-class _Branch:
-    """One configuration followed along the program, per stretch: the first sample where it fails
-    (``len(samples)`` when it does not), how (``_MISSING``, ``_JUMP``, ``_LIMIT``) and its room to the
-    limits before that; per sample whether a joint jumps there."""
+class _Branches:
+    """The eight configurations followed along the program, per configuration and stretch (8, runs): the
+    first sample where it fails (``len(samples)`` when it does not), how (``_MISSING``, ``_JUMP``,
+    ``_LIMIT``, ``_NONE``) and its room to the limits before that."""
 
     fail: np.ndarray
     how: np.ndarray
     room: np.ndarray
-    jump: np.ndarray
 
 
 _MISSING, _JUMP, _LIMIT, _NONE = 0, 1, 2, 3
 
 
+def _least_margin(joints_by_joint: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(..., n) for joints (..., 6, n), one row per joint: the smallest distance in degrees of any joint to
+    its nearer limit (``low``, ``high``: (6,)), negative past it, NaN where the joints are NaN."""
+    rows = np.moveaxis(joints_by_joint, -2, 0)
+    with np.errstate(invalid="ignore"):
+        out = np.subtract(rows[0], low[0])
+        np.minimum(out, high[0] - rows[0], out=out)
+        for joint in range(1, 6):
+            np.minimum(out, rows[joint] - low[joint], out=out)
+            np.minimum(out, high[joint] - rows[joint], out=out)
+    return out
+
+
 class _Follower:
+    """Solves the program's samples chunk by chunk and follows the eight configurations along them: each
+    chunk is unwrapped and checked for jumps while it is fresh in the caches, then every stretch is
+    moved by the whole turns that leave the most room to the limits."""
+
     def __init__(self, robot: Robot, path: _Samples):
+        self.robot = robot
         self.low, self.high = robot.limits[:, 0], robot.limits[:, 1]
         self.path = path
         self.allowed = MAX_JOINT_STEP_DEG * np.maximum(path.step, MIN_STEP_SHARE)
+        self.start_of = path.starts[path.run]  # the first sample of every sample's stretch
 
-    def follow(self, followed: np.ndarray, branch: int) -> _Branch:
-        """Follow ``branch`` along the program; its rows of ``followed`` (6, M) become the continuous
-        joints, each stretch moved by the whole turns that leave the most room to the limits."""
+    def follow(self) -> tuple[np.ndarray, _Branches]:
+        """(8, 6, M) the joints of every configuration at every sample, each joint continuous along a
+        stretch and at the turn that leaves the most room to its limits, and what each configuration
+        does per stretch."""
         path, count = self.path, len(self.path)
-        q = followed[branch]
-        missing = np.isnan(q[0])
-        step = np.diff(q, axis=1)
-        unwind = np.round(step / 360.0)
-        unwind *= 360.0
-        unwind[:, path.starts[1:] - 1] = 0.0  # no continuity into a joint move
-        unwind = np.nan_to_num(unwind, copy=False)
-        turns = np.zeros_like(q)
-        np.cumsum(unwind, axis=1, out=turns[:, 1:])
-        if len(path.starts) > 1:
-            turns -= np.repeat(turns[:, path.starts], path.lengths, axis=1)
-        q -= turns
-        step -= unwind
-        np.abs(step, out=step)
-        jump = np.zeros(count, dtype=bool)
+        runs = len(path.starts)
+        followed = np.empty((8, 6, count))
+        first_bad = np.full((8, runs), count)  # per stretch, the first sample missing or jumping
+        low = np.full((8, 6, runs), np.nan)  # per stretch, the extremes of the samples before it
+        high = np.full((8, 6, runs), np.nan)
+        previous = np.full((8, 6), np.nan)  # the last sample of the chunk before, as solved
+        turns = np.zeros((8, 6))  # the whole turns unwound since the stretch began, at that sample
+        for start, stop in self._chunks():
+            block = inverse_by_joint(self.robot, path.poses[start:stop], out=followed[:, :, start:stop])
+            jump = np.empty((8, stop - start), dtype=bool)
+            previous, turns = self._unwrap(block, start, previous, turns, jump)
+            bad = np.isnan(block[:, 0])
+            bad |= jump
+            self._note_first(bad, start, first_bad)
+            valid = np.arange(start, stop) < self._per_sample(first_bad, start, stop)
+            self._extend(low, high, block, valid, start, stop)
+
         with np.errstate(invalid="ignore"):
-            jump[1:] = step.max(axis=0) > self.allowed[1:]
-        del step, unwind, turns
-        index = np.arange(count)
-        bad = missing | jump
-        first_bad = np.minimum.reduceat(np.where(bad, index, count), path.starts)
-        valid = index < np.repeat(first_bad, path.lengths)
-        masked = q if valid.all() else np.where(valid, q, np.nan)
-        with np.errstate(invalid="ignore"):
-            low = np.fmin.reduceat(masked, path.starts, axis=1)
-            high = np.fmax.reduceat(masked, path.starts, axis=1)
             room = np.minimum(low[..., None] + TURN_SHIFTS_DEG - self.low[:, None, None],
                               self.high[:, None, None] - high[..., None] - TURN_SHIFTS_DEG)
         room = np.nan_to_num(room, nan=-np.inf)
-        best = np.argmax(room, axis=-1)  # (6, runs)
+        best = np.argmax(room, axis=-1)  # (8, 6, runs)
         most = np.take_along_axis(room, best[..., None], axis=-1)[..., 0]
-        cramped = np.flatnonzero((np.isfinite(most) & (most < 0)).any(axis=1))
-        for joint in cramped:  # a joint no whole turn fits: the turn that keeps it inside its limits longest
-            best[joint] = self._longest_inside(masked[joint], joint, room[joint])
+        for branch, joint in np.argwhere((np.isfinite(most) & (most < 0)).any(axis=2)):
+            # a joint no whole turn fits: the turn that keeps it inside its limits longest
+            valid = np.arange(count) < self._per_sample(first_bad[branch], 0, count)
+            values = np.where(valid, followed[branch, joint], np.nan)
+            best[branch, joint] = self._longest_inside(values, joint, room[branch, joint])
         shift = TURN_SHIFTS_DEG[best]
-        q += np.repeat(shift, path.lengths, axis=1) if len(path.starts) > 1 else shift
-        with np.errstate(invalid="ignore"):
-            margin = np.minimum(q - self.low[:, None], self.high[:, None] - q).min(axis=0)
-            outside = valid & (margin < 0)
-        first_outside = np.minimum.reduceat(np.where(outside, index, count), path.starts)
+
+        first_outside = np.full((8, runs), count)  # per stretch, the first sample before first_bad past a limit
+        least = np.full((8, 1, runs), np.nan)  # per stretch, the smallest margin before it fails
+        for start, stop in self._chunks():
+            block = followed[:, :, start:stop]
+            block += self._per_sample(shift, start, stop)
+            margin = _least_margin(block, self.low, self.high)
+            index = np.arange(start, stop)
+            with np.errstate(invalid="ignore"):
+                outside = margin < 0
+            outside &= index < self._per_sample(first_bad, start, stop)
+            self._note_first(outside, start, first_outside)
+            before_fail = index < self._per_sample(np.minimum(first_bad, first_outside), start, stop)
+            self._extend(least, None, margin[:, None], before_fail, start, stop)
         fail = np.minimum(first_bad, first_outside)
         failed = fail < path.ends
         at = np.minimum(fail, count - 1)
-        how = np.where(~failed, _NONE, np.where(missing[at], _MISSING, np.where(jump[at], _JUMP, _LIMIT)))
+        missing = np.isnan(np.take_along_axis(followed[:, 0], at, axis=1))
+        how = np.where(~failed, _NONE, np.where(missing, _MISSING, np.where(at == first_bad, _JUMP, _LIMIT)))
+        return followed, _Branches(fail, how, least[:, 0])
+
+    def _chunks(self):
+        """(start, stop) of the chunks of samples solved and followed at a time."""
+        count = len(self.path)
+        return [(start, min(start + SOLVE_CHUNK, count)) for start in range(0, count, SOLVE_CHUNK)]
+
+    def _per_sample(self, per_stretch: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """(..., n) or (..., 1) the value of every sample start .. stop - 1 from (..., runs) per stretch."""
+        run = self.path.run
+        if run[start] == run[stop - 1]:
+            return per_stretch[..., run[start], None]
+        return per_stretch[..., run[start:stop]]
+
+    def _note_first(self, flags: np.ndarray, start: int, first: np.ndarray) -> None:
+        """Lowers ``first`` (rows, runs) to the first set sample per row and stretch of ``flags`` (rows, n),
+        the samples start .. start + n - 1 (chunks come in order, so a stretch's first is its earliest)."""
+        run = self.path.run
+        stop = start + flags.shape[-1]
+        if run[start] == run[stop - 1]:  # within one stretch: the first set sample at all
+            stretch = run[start]
+            for row, set_in_row in zip(first, flags):
+                at = int(np.argmax(set_in_row))
+                if set_in_row[at]:
+                    row[stretch] = min(row[stretch], start + at)
+            return
+        for row, set_in_row in zip(first, flags):
+            hits = np.flatnonzero(set_in_row)
+            if hits.size:
+                stretches = run[start + hits]  # ascending
+                earliest = np.flatnonzero(np.diff(stretches, prepend=-1))
+                row[stretches[earliest]] = np.minimum(row[stretches[earliest]], start + hits[earliest])
+
+    def _extend(self, low: np.ndarray, high: np.ndarray | None, block: np.ndarray, valid: np.ndarray, start: int,
+                stop: int) -> None:
+        """Extends ``low`` and ``high`` (rows, k, runs) by the valid samples of ``block`` (rows, k, n), the
+        samples start .. stop - 1, per stretch (NaN-ignoring; ``high`` may be None)."""
+        run = self.path.run[start:stop]
+        masked = block if valid.all() else np.where(valid[:, None], block, np.nan)
+        bounds = np.concatenate([[0], np.flatnonzero(run[1:] != run[:-1]) + 1])
+        stretches = run[bounds]
         with np.errstate(invalid="ignore"):
-            run_room = np.fmin.reduceat(np.where(index < np.repeat(fail, path.lengths), margin, np.nan),
-                                        path.starts)
-        return _Branch(fail, how, run_room, jump)
+            low[:, :, stretches] = np.fmin(low[:, :, stretches], np.fmin.reduceat(masked, bounds, axis=2))
+            if high is not None:
+                high[:, :, stretches] = np.fmax(high[:, :, stretches], np.fmax.reduceat(masked, bounds, axis=2))
+
+    def _unwrap(self, block: np.ndarray, start: int, previous: np.ndarray, turns: np.ndarray,
+                jump: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unwinds whole turns between consecutive samples of ``block`` (8, 6, n), the solutions of samples
+        start .. start + n - 1, in place, and sets ``jump`` (8, n) where a joint still turns more than
+        allowed; ``previous`` and ``turns`` carry the sample before (as solved) and the turns unwound in its
+        stretch.  Returns them for the next chunk."""
+        path = self.path
+        stop = start + block.shape[2]
+        step = np.empty_like(block)
+        np.subtract(block[:, :, :1], previous[:, :, None], out=step[:, :, :1])
+        np.subtract(block[:, :, 1:], block[:, :, :-1], out=step[:, :, 1:])
+        last_solved = block[:, :, -1].copy()
+        magnitude = np.abs(step)
+        largest = magnitude.max(axis=1)  # (8, n): NaN only where the configuration is missing
+        starts_here = path.starts[(path.starts >= start) & (path.starts < stop)] - start
+        if (largest > 180.0).any():  # a joint passes +-180: unwind the turn
+            unwind = np.round(step / 360.0)
+            unwind *= 360.0
+            unwind[:, :, starts_here] = 0.0  # no continuity into a joint move
+            unwind = np.nan_to_num(unwind, copy=False)
+            total = np.cumsum(unwind, axis=2)
+            total += turns[:, :, None]
+            if starts_here.size:  # turns count from the start of each stretch
+                own = self.start_of[start:stop] - start
+                begun = own >= 0
+                total[:, :, begun] -= total[:, :, own[begun]]
+            block -= total
+            step -= unwind
+            np.abs(step, out=magnitude)
+            magnitude.max(axis=1, out=largest)
+            turns = total[:, :, -1].copy()
+        elif turns.any():
+            if starts_here.size:
+                total = np.broadcast_to(turns[:, :, None], block.shape).copy()
+                total[:, :, starts_here[0]:] = 0.0
+                block -= total
+            else:
+                block -= turns[:, :, None]
+            if starts_here.size:
+                turns = np.zeros_like(turns)
+        with np.errstate(invalid="ignore"):
+            np.greater(largest, self.allowed[start:stop], out=jump)
+        if start == 0:
+            jump[:, 0] = False
+        return last_solved, turns
 
     def _longest_inside(self, values: np.ndarray, joint: int, room: np.ndarray) -> np.ndarray:
         """(runs,) index into TURN_SHIFTS_DEG: per stretch, the whole turn after which ``values`` (M,) of
         ``joint`` first leave its limits latest (then the one with the most room)."""
-        path, count = self.path, len(self.path)
-        index = np.arange(count)
-        latest = np.empty((len(path.starts), len(TURN_SHIFTS_DEG)))
+        latest = np.empty((len(self.path.starts), len(TURN_SHIFTS_DEG)))
+        shifted = np.empty_like(values)
+        out, above = np.empty(len(values), dtype=bool), np.empty(len(values), dtype=bool)
         for k, shift in enumerate(TURN_SHIFTS_DEG):  # a handful of turns, each over every sample at once
+            np.add(values, shift, out=shifted)
             with np.errstate(invalid="ignore"):
-                out = (values + shift < self.low[joint]) | (values + shift > self.high[joint])
-            latest[:, k] = np.minimum.reduceat(np.where(out, index, count), path.starts)
+                np.less(shifted, self.low[joint], out=out)
+                np.greater(shifted, self.high[joint], out=above)
+            out |= above
+            first = np.full((1, len(self.path.starts)), len(values))
+            self._note_first(out[None], 0, first)
+            latest[:, k] = first[0]
         return np.lexsort((room, latest), axis=-1)[:, -1]
 
 
@@ -341,14 +446,14 @@ class _Choice:
     best: int | None  # the configuration that goes furthest in the failed stretch
 
 
-def _choose(robot: Robot, results: list, path: _Samples) -> _Choice:
+def _choose(robot: Robot, branches: _Branches, path: _Samples) -> _Choice:
     """One configuration per stretch: the previous one where it follows the stretch, else (OPW arms)
     the usual posture where it does (``USUAL_ARM``), else the one with the most room to the limits;
     the first stretch none follows stops the choice."""
-    fail = np.stack([r.fail for r in results])  # (8, runs)
-    room = np.nan_to_num(np.stack([r.room for r in results]), nan=-np.inf)
+    fail = branches.fail  # (8, runs)
+    room = np.nan_to_num(branches.room, nan=-np.inf)
     follows = fail >= path.ends
-    usual = (np.arange(len(results)) % 4 == USUAL_ARM) if robot.opw is not None else np.ones(len(results), bool)
+    usual = (np.arange(len(fail)) % 4 == USUAL_ARM) if robot.opw is not None else np.ones(len(fail), bool)
     chosen = np.full(len(path.starts), -1, dtype=np.int64)
     previous = None
     for run in range(len(path.starts)):  # one pass over the stretches between joint moves
@@ -366,26 +471,30 @@ def _choose(robot: Robot, results: list, path: _Samples) -> _Choice:
     return _Choice(chosen, len(path), None, None)
 
 
-def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice) -> ReachReport:
+def _report(robot: Robot, path: _Samples, followed: np.ndarray, branches: _Branches, choice: _Choice) -> ReachReport:
+    solutions = followed.transpose(2, 0, 1)  # (M, 8, 6)
     stop = choice.stop
     samples = np.arange(stop)
     branch = choice.branch_of_run[path.run[:stop]]
-    joints = solutions[samples, branch]
+    one = int(branch[0]) if stop and (branch == branch[0]).all() else None  # one configuration all along
+    # (stop, 6) the joints the robot runs at every sample it follows, and each sample's joint margin
+    joints = followed[one, :, :stop].T if one is not None else solutions[samples, branch]
+    margins = _least_margin(joints.T, robot.limits[:, 0], robot.limits[:, 1])
     reached = np.zeros(len(path), dtype=bool)
     reached[:stop] = True
     target_rows = np.flatnonzero(path.at_target & reached)
     count = len(path.kinds)
     target_joints = np.full((count, 6), np.nan)
     target_branch = np.full(count, -1, dtype=np.int8)
-    target_joints[path.owner[target_rows]] = solutions[target_rows, branch[target_rows]]
+    target_joints[path.owner[target_rows]] = joints[target_rows]
     target_branch[path.owner[target_rows]] = branch[target_rows]
 
     margin = wrist = elbow = shoulder = margin_pose = None
     near = []
     if stop:
-        per_joint = np.minimum(joints - robot.limits[:, 0], robot.limits[:, 1] - joints)
-        at = int(np.argmin(per_joint.min(axis=1)))
-        margin = Extreme(float(per_joint[at].min()), path.where(at), int(np.argmin(per_joint[at])))
+        at = int(np.argmin(margins))
+        per_joint = np.minimum(joints[at] - robot.limits[:, 0], robot.limits[:, 1] - joints[at])
+        margin = Extreme(float(per_joint.min()), path.where(at), int(np.argmin(per_joint)))
         margin_pose = PoseOnPath(path.where(at), tuple(float(v) for v in joints[at]))
         wrist_deg, elbow_deg = singular_angles(robot, joints)
         shoulder_mm = shoulder_distance(robot, path.poses[:stop])
@@ -407,10 +516,10 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
                     if runs[r] >= 0 and runs[r - 1] >= 0 and runs[r] != runs[r - 1])
     problem, reason, problem_at, problem_joint, problem_pose = None, "", None, None, None
     if choice.failed_run is not None:
-        problem, reason, problem_joint = _problem(robot, path, solutions, results, choice)
+        problem, reason, problem_joint = _problem(robot, path, solutions, branches, choice)
         problem_at = path.where(stop)
         past_limit = solutions[stop, choice.best]
-        if results[choice.best].how[choice.failed_run] == _LIMIT and not np.isnan(past_limit).any():
+        if branches.how[choice.best, choice.failed_run] == _LIMIT and not np.isnan(past_limit).any():
             problem_pose = PoseOnPath(problem_at, tuple(float(v) for v in past_limit), past_limit=True)
         elif stop:
             problem_pose = PoseOnPath(path.where(stop - 1), tuple(float(v) for v in joints[stop - 1]))
@@ -422,7 +531,7 @@ def _report(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, 
                        target_joints, target_branch, margin_pose, problem_pose)
 
 
-def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list, choice: _Choice):
+def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, branches: _Branches, choice: _Choice):
     """(code, reason, joint) for the stretch no configuration follows, at the sample where the
     configuration that goes furthest fails."""
     at, best = choice.stop, choice.best
@@ -435,7 +544,7 @@ def _problem(robot: Robot, path: _Samples, solutions: np.ndarray, results: list,
         return OUT_OF_REACH, (f"{where} is out of the robot's reach: no configuration puts the flange at "
                               f"({x:.1f}, {y:.1f}, {z:.1f}) mm in the robot base frame, "
                               f"{np.linalg.norm(flange[:3, 3]):.0f} mm from its origin"), None
-    how = results[best].how[choice.failed_run]
+    how = branches.how[best, choice.failed_run]
     start = path.where(int(path.starts[choice.failed_run])).text()
     if how == _JUMP:
         turned = np.abs(here[best] - solutions[at - 1, best])
@@ -528,9 +637,9 @@ def singular_angles(robot: Robot, joints_deg) -> tuple[np.ndarray, np.ndarray]:
     or 180 (axes 4 and 6 in line), the elbow from the arm stretched or folded."""
     joints = np.asarray(joints_deg, dtype=float)
     if robot.opw is not None:
-        theta = np.degrees(model_angles(robot.opw, joints))
-        elbow = theta[..., 2] + np.degrees(np.arctan2(robot.opw.a2, robot.opw.c3))
-        return _from_singular(theta[..., 4]), _from_singular(elbow)
+        wrist = np.degrees(model_angle(robot.opw, joints, 4))
+        elbow = np.degrees(model_angle(robot.opw, joints, 2)) + np.degrees(np.arctan2(robot.opw.a2, robot.opw.c3))
+        return _from_singular(wrist), _from_singular(elbow)
     return _from_singular(joints[..., 4]), _from_singular(joints[..., 2])
 
 

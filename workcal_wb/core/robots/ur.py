@@ -70,60 +70,67 @@ def dh_frames(robot_or_params, joints_deg) -> np.ndarray:
 
 def inverse(robot_or_params, poses) -> np.ndarray:
     """(..., 8, 6) joints in degrees for (..., 4, 4) flange poses, NaN where a branch is unreachable."""
-    return solved_in_chunks(_inverse_chunk, parameters_of(robot_or_params), poses)
+    params = parameters_of(robot_or_params)
+    return solved_in_chunks(lambda chunk: inverse_by_joint(params, chunk), poses)
 
 
-def _inverse_chunk(p: UrParameters, T: np.ndarray) -> np.ndarray:
+def inverse_by_joint(p: UrParameters, T: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """(8, 6, n) joints in degrees, branch by joint by pose, for (n, 4, 4) flange poses: ``inverse`` laid out
+    so that each joint of each branch is one contiguous row (written into ``out`` if given)."""
     n = len(T)
-    x_axis, y_axis, z_axis, position = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3]
-    wrist5 = position - p.d6 * z_axis  # origin of joint 5's frame
+    xx, yx, zx, px, xy, yy, zy, py, xz, yz, zz, pz = T[:, :3, :].reshape(n, 12).T.copy()
+    # The origin of joint 5's frame.
+    w5x, w5y, w5z = px - p.d6 * zx, py - p.d6 * zy, pz - p.d6 * zz
     with np.errstate(invalid="ignore", divide="ignore"):
-        spread = arccos_within_rounding(p.d4 / np.hypot(wrist5[:, 0], wrist5[:, 1]))
-        base_angle = np.arctan2(wrist5[:, 1], wrist5[:, 0]) + np.pi / 2
-        q1 = np.stack([base_angle + spread, base_angle - spread], axis=1)  # (n, 2): shoulder
+        spread = arccos_within_rounding(p.d4 / np.hypot(w5x, w5y))
+        base_angle = np.arctan2(w5y, w5x) + np.pi / 2
+        q1 = np.stack([base_angle + spread, base_angle - spread])  # (2 shoulder, n)
         s1, c1 = np.sin(q1), np.cos(q1)
         # Joint 5 is the angle between the flange axis and the joint-1 normal n = (s1, -c1, 0): cos q5 = z6 . n
         # (Hawkins uses the equal (p . n - d4) / d6); sin q5 from the two other components keeps q5 accurate
         # near the wrist singularity, where an arccos would lose half the digits.  The root's sign is the branch.
-        cos5 = z_axis[:, 0, None] * s1 - z_axis[:, 1, None] * c1
-        sin5 = np.hypot(z_axis[:, 0, None] * c1 + z_axis[:, 1, None] * s1, z_axis[:, 2, None])
+        cos5 = zx * s1 - zy * c1
+        sin5 = np.hypot(zx * c1 + zy * s1, zz)
         wrist = np.arctan2(sin5, cos5)
-        wrist = np.where(np.isnan(q1), np.nan, wrist)
-        q5 = np.stack([wrist, -wrist], axis=1)  # (n, 2 wrist, 2 shoulder)
-        s5 = np.sin(q5)
+        q5 = np.stack([wrist, -wrist])  # (2 wrist, 2 shoulder, n)
+        s5, c5 = np.sin(q5), np.cos(q5)
         # Joint 6 from the base axes seen from the flange: x0 and y0 components along the joint-1 normal.
-        ny = -x_axis[:, 1, None] * c1 + x_axis[:, 0, None] * s1  # (n, 2 shoulder)
-        oy = -y_axis[:, 1, None] * c1 + y_axis[:, 0, None] * s1
+        ny = -xy * c1 + xx * s1  # (2 shoulder, n)
+        oy = -yy * c1 + yx * s1
         sign5 = np.where(s5 < 0, -1.0, 1.0)
-        singular = np.abs(s5) < WRIST_SINGULAR_SIN
-        q6 = np.where(singular, 0.0, np.arctan2(-oy[:, None, :] * sign5, ny[:, None, :] * sign5))
+        q6 = np.arctan2(-oy * sign5, ny * sign5)
+        q6[np.abs(s5) < WRIST_SINGULAR_SIN] = 0.0
+        s6, c6 = np.sin(q6), np.cos(q6)
 
-        # The planar arm: frame 1 -> frame 4 = T01^-1 T T56^-1 T45^-1, for each (wrist, shoulder) pair.
-        q1w = np.broadcast_to(q1[:, None, :], q5.shape)
-        T01 = _dh(q1w, 0.0, p.d1, _ALPHA[0])
-        T45 = _dh(q5, 0.0, p.d5, _ALPHA[4])
-        T56 = _dh(q6, 0.0, p.d6, _ALPHA[5])
-        T14 = _invert(T01) @ T[:, None, None] @ _invert(T56) @ _invert(T45)
-        x, y = T14[..., 0, 3], T14[..., 1, 3]
+        # The planar arm in frame 1 (T01^-1 T T56^-1 T45^-1, written out): the origin of frame 4 is
+        # the joint-5 origin moved d5 along the flange's -y turned by -q6, and the angle q2 + q3 + q4 that
+        # of frame 4's x axis, c5 (c6 x6 - s6 y6) - s5 z6, in the arm's plane.
+        p4x, p4y, p4z = w5x + p.d5 * (s6 * xx + c6 * yx), w5y + p.d5 * (s6 * xy + c6 * yy), \
+            w5z + p.d5 * (s6 * xz + c6 * yz)
+        x = c1 * p4x + s1 * p4y
+        y = p4z - p.d1
+        x4x, x4y, x4z = (c5 * (c6 * xx - s6 * yx) - s5 * zx, c5 * (c6 * xy - s6 * yy) - s5 * zy,
+                         c5 * (c6 * xz - s6 * yz) - s5 * zz)
+        q234 = np.arctan2(x4z, c1 * x4x + s1 * x4y)[:, :, None]
         cos3 = (x * x + y * y - p.a2 * p.a2 - p.a3 * p.a3) / (2.0 * p.a2 * p.a3)
         elbow = arccos_within_rounding(cos3)
-        q3 = np.stack([elbow, -elbow], axis=-1)  # (n, 2 wrist, 2 shoulder, 2 elbow)
-        xs, ys = x[..., None], y[..., None]
-        q2 = np.arctan2(ys, xs) - np.arctan2(p.a3 * np.sin(q3), p.a2 + p.a3 * np.cos(q3))
-        q234 = np.arctan2(T14[..., 1, 0], T14[..., 0, 0])[..., None]
+        q3 = np.stack([elbow, -elbow], axis=2)  # (2 wrist, 2 shoulder, 2 elbow, n)
+        q2 = np.arctan2(y, x)[:, :, None] - np.arctan2(p.a3 * np.sin(q3), p.a2 + p.a3 * np.cos(q3))
         q4 = q234 - q2 - q3
 
-    joints = np.empty((n, 2, 2, 2, 6))
-    joints[..., 0] = q1[:, None, :, None]
-    joints[..., 1] = q2
-    joints[..., 2] = q3
-    joints[..., 3] = q4
-    joints[..., 4] = q5[..., None]
-    joints[..., 5] = q6[..., None]
-    joints = np.degrees(joints, out=joints)
-    joints = wrap_degrees(joints, out=joints).reshape(n, 8, 6)
-    joints[np.isnan(joints).any(axis=2)] = np.nan
-    return joints
+    out = np.empty((8, 6, n)) if out is None else out
+    joints = out.view()
+    joints.shape = (2, 2, 2, 6, n)  # (wrist, shoulder, elbow, joint, pose), a view of out
+    joints[:, :, :, 0] = q1[None, :, None]
+    joints[:, :, :, 1] = q2
+    joints[:, :, :, 2] = q3
+    joints[:, :, :, 3] = q4
+    joints[:, :, :, 4] = q5[:, :, None]
+    joints[:, :, :, 5] = q6[:, :, None]
+    np.degrees(out, out=out)
+    wrap_degrees(out, out=out)
+    np.copyto(out, np.nan, where=np.isnan(out).any(axis=1)[:, None])  # a branch is whole or absent
+    return out
 
 
 def _dh(theta, a: float, d: float, alpha: float) -> np.ndarray:
