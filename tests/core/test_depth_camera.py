@@ -55,3 +55,17 @@ def test_the_verdicts_table_takes_one_view_of_each_part_and_judges_it_at_its_tol
     slid = case.truth @ frames.rigid(translation=(2.0, 0.0, 0.0))  # the model slid 2 mm along its x
     assert right(surface, slid, case.truth, max(RIGHT_MM, case.tolerance_mm))
     assert not right(surface, slid, case.truth, RIGHT_MM)
+
+
+def test_a_thin_plate_whose_sides_lie_in_the_tables_band_is_never_ok_turned():
+    """A 6 mm plate lying on the table: its sides are mostly within the table's noise band; left out with
+    the table, only the top face and its outline hold the fit, and a turn of it must not pass as right."""
+    mesh = shapes.plate()
+    scan = depth_camera_scan(mesh, 101)
+    surface = SurfaceModel(mesh, 0)
+    result = match(Cloud(scan.points, name="plate #101"), surface, tolerance_mm=TOLERANCE_MM, seed=0)
+    if result.status == OK:
+        assert largest_displacement(mesh, result.matrix, scan.U) < TOLERANCE_MM
+    from_truth = match(Cloud(scan.points, name="plate #101"), surface, init=scan.U, tolerance_mm=TOLERANCE_MM, seed=0)
+    if from_truth.status == OK:
+        assert largest_displacement(mesh, from_truth.matrix, scan.U) < TOLERANCE_MM

@@ -213,6 +213,9 @@ THIN_PART, THIN_WALL_DIAGONALS = 0.08, 0.25
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
 THIN_WALL_NOISES = 5.0
+# The fits leave out the support's points within this many noises of its plane (and within its band): the
+# table's scatter, but not more of a low part's own sides (a plate's), which hold its turn in the plane.
+SUPPORT_BAND_NOISES = 2.5
 # A pose whose outline, seen from the sensor, holds more than this share of scan pixels whose points
 # lie behind its surface, inside the part (within OFF_BAND_GATES evidence gates: further behind they
 # are hidden, a contradiction), leaves a large share of the scan unexplained: ambiguous.
@@ -295,7 +298,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                else Support.of(sample, voxel, surface.diagonal, options.seed))
     # The fits see the part, not what it stands on: the support's points by its foot would pull it
     # along the plane or tilt it.  The verdict weighs the whole scan, the support included.
-    fine, medium = _off_support(fine, support), _off_support(medium, support)
+    band = SUPPORT_BAND_NOISES * noise
+    fine, medium = _off_support(fine, support, band), _off_support(medium, support, band)
     turned = {}  # pose (its bytes) -> its turns refined (_near_symmetric_turns): the verdict asks again for the best's
 
     def turns_of(state):
@@ -1424,11 +1428,11 @@ class Support:
         return cls(on_plane, centre, normal, voxel)
 
 
-def _off_support(points: np.ndarray, support: Support | None) -> np.ndarray:
-    """``points`` less those on the support, unless too few would be left to fit."""
+def _off_support(points: np.ndarray, support: Support | None, band: float) -> np.ndarray:
+    """``points`` less those within ``band`` of the support (and its own band), unless too few would be left."""
     if support is None:
         return points
-    kept = points[~support.holds(points)]
+    kept = points[np.abs((points - support.centre) @ support.normal) > min(band, support.band)]
     return kept if len(kept) >= MIN_SCAN_POINTS else points
 
 
