@@ -21,7 +21,7 @@ XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
 PYTEST_ARGS   := -q -rfEs --durations=10 -p no:cacheprovider --rootdir=$(CURDIR) -W ignore::DeprecationWarning:importlib._bootstrap
 
-.PHONY: setup python-packages peers test-peers demo test test-headless test-gui test-other-freecad fuzz bench bench-verdicts \
+.PHONY: setup python-packages peers test-peers demo test test-headless test-fast test-gui test-other-freecad fuzz bench bench-verdicts \
         bench-scenes bench-processes bench-large bench-matcher bench-lblock bench-reach clean
 
 setup:
@@ -41,6 +41,13 @@ test: test-headless test-gui
 test-headless: setup python-packages test-peers
 	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
 	rc = pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split()); sys.stdout.flush(); sys.exit(rc)"
+
+# The headless tests that need no whole calibration, global search, benchmark run or real-scan study (the
+# rest are marked slow): a few minutes, for checks while developing.  `make test` still runs every test.
+test-fast: setup python-packages test-peers
+	$(FREECAD_ENV) freecadcmd -c "import sys, pytest; \
+	rc = pytest.main('$(PYTEST_ARGS) $(CURDIR)/tests/core $(CURDIR)/tests/fc'.split() + ['-m', 'not slow']); \
+	sys.stdout.flush(); sys.exit(rc)"
 
 test-gui: setup
 	$(FREECAD_ENV) $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py

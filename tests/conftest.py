@@ -16,6 +16,14 @@ BUNNY = SHARED / "data" / "stanford-bunny"
 OUTPUT = Path(os.environ.get("WORKCAL_TEST_OUTPUT", ROOT / "build" / "test-output"))
 
 
+def pytest_configure(config):
+    """The ``slow`` mark: tests that take seconds (a whole calibration, a global search, a benchmark run, a
+    real-scan study, a large batch).  `make test-fast` leaves them out (``-m "not slow"``); `make test` runs
+    every test."""
+    config.addinivalue_line("markers", "slow: takes seconds (a whole calibration, a global search, a benchmark "
+                                       "run, a real-scan study, a large batch); left out by `make test-fast`")
+
+
 @pytest.fixture(scope="session", autouse=True)
 def _own_cache_folder(tmp_path_factory):
     """The model cache of every run in the tests (in process and in subprocesses) in a folder of the

@@ -14,6 +14,7 @@ def _on_model(case, surface, gate=2.0):
     return found.mean()
 
 
+@pytest.mark.slow
 def test_simulated_cases_sit_on_their_model_at_the_truth():
     cases = simulated_cases(seed=1, quick=True)
     surfaces = {}
@@ -25,6 +26,7 @@ def test_simulated_cases_sit_on_their_model_at_the_truth():
                                        "simulated figurine, region"}
 
 
+@pytest.mark.slow
 def test_bunny_reference_poses_and_realistic_clutter(bunny):
     cases = {c.name: c for c in bunny_cases(bunny, seed=2, scans=("bun000.ply",))}
     surface = SurfaceModel(cases["bun000 clean"].model)
@@ -92,6 +94,7 @@ def dragon_set():
     return dragon_cases(seed=0)
 
 
+@pytest.mark.slow
 def test_dragon_scans_lie_on_the_other_scans_at_their_truth(dragon_set):
     """The real-data set in the repository: each decimated dragon scan, moved by its .conf truth,
     lies on the other 14 scans aligned the same way (the model it is matched against)."""
@@ -201,6 +204,7 @@ def test_peers_read_the_files_workcal_writes(tmp_path):
         assert np.array_equal(read_vertices(tmp_path / name), points)
 
 
+@pytest.mark.slow
 def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set, monkeypatch):
     """Dragon stand scan 144 against the other 14 (verdicts table, seed 0): on Debian 12's stack the
     first feature search's best leaves the model 2 mm and more off the scan; the match searches once
@@ -231,6 +235,7 @@ def test_real_scan_whose_first_search_misses_is_searched_again(dragon_set, monke
     assert result.status == "ok" and right(surface, result.matrix, case.truth), result.reasons
 
 
+@pytest.mark.slow
 def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
     """The verdicts' matches, one task per model, on two worker processes: the same rows, in the same
     order, as one after the other here (the scenes' calibrations go through the same parallel.Runner,
@@ -251,6 +256,7 @@ def test_verdicts_batch_on_a_process_pool_gives_the_serial_rows():
     assert pooled == serial
 
 
+@pytest.mark.slow
 def test_the_l_block_on_its_foot_section_has_its_hundred_scenes_and_counts_a_wrong_ok():
     """The section's scenes: at least a hundred over seeds and two noise levels (the figurine stands in
     for the bunny without the shared data); its table and its one goal, no wrong W reported ok; and one

@@ -26,6 +26,7 @@ def _args(folder, out, *extra):
             "--reference", str(folder / "reference.ply"), "--out", str(out), *extra]
 
 
+@pytest.mark.slow
 def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path, capsys):
     folder, W_true = scene_files
     assert main(_args(folder, tmp_path, "--toolpath", str(folder / "toolpath.nc"), "--machine", "5axis-tcp")) == 0
@@ -48,6 +49,7 @@ def test_calibrate_writes_W_report_and_calibrated_toolpath(scene_files, tmp_path
     assert "calibration OK" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_a_toolpath_made_for_another_part_is_not_written(scene_files, tmp_path, capsys):
     """A larger variant's toolpath: this one's pass 40 mm off the part's surface (close enough to pass as
     the same part's in the model's unit and frame, too far for any cut on it)."""
@@ -65,6 +67,7 @@ def test_a_toolpath_made_for_another_part_is_not_written(scene_files, tmp_path, 
     assert not list(out.glob("toolpath_calibrated.*"))
 
 
+@pytest.mark.slow
 def test_calibrate_with_a_robot_plots_its_joint_margins_in_the_report(scene_files, tmp_path, capsys):
     """The program checked against the robot: the report shows each joint's margin at every robot target
     (the same margins the program's header states), and what the robot cannot follow it says, and where."""
@@ -91,6 +94,7 @@ def test_calibrate_with_a_robot_plots_its_joint_margins_in_the_report(scene_file
     capsys.readouterr()
 
 
+@pytest.mark.slow
 def test_failed_calibration_writes_no_toolpath(scene_files, tmp_path):
     folder, _ = scene_files
     # The workpiece "region" is the first image rows: bare platform, nothing to fix a pose on.
@@ -121,6 +125,7 @@ def test_bad_input_exits_2_and_writes_nothing(scene_files, tmp_path, capsys):
     assert "empty.ply" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_demo_runs_the_whole_job(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     check = json.loads((tmp_path / "truth_check.json").read_text())

@@ -54,6 +54,7 @@ def _errors(W, W_true):
     return frames.rotation_between_deg(W, W_true), float(np.linalg.norm(W[:3, 3] - W_true[:3, 3]))
 
 
+@pytest.mark.slow
 def test_automatic_calibration_recovers_W(car):
     scene, scan, _, result = car
     assert result.status == "ok", result.reasons
@@ -63,6 +64,7 @@ def test_automatic_calibration_recovers_W(car):
     assert _errors(result.U, scan.U)[0] < 0.02 and _errors(result.V, scan.V)[0] < 0.02
 
 
+@pytest.mark.slow
 def test_automatic_regions_are_the_true_objects(car):
     _, scan, _, result = car
     for role in ("workpiece", "reference"):
@@ -73,6 +75,7 @@ def test_automatic_regions_are_the_true_objects(car):
     assert result.regions["source"] == "auto"
 
 
+@pytest.mark.slow
 def test_uncertainty_bounds_the_true_error_at_the_toolpath(car):
     scene, _, toolpath, result = car
     actual = np.linalg.norm(frames.apply(result.W, toolpath) - frames.apply(scene.W, toolpath), axis=1).max()
@@ -82,6 +85,7 @@ def test_uncertainty_bounds_the_true_error_at_the_toolpath(car):
     assert all(g["passed"] for g in result.quality_gates)
 
 
+@pytest.mark.slow
 def test_the_matches_that_located_the_objects_are_the_final_ones(car):
     """A calibration searched each object, matched each region again from that pose, and
     made every bootstrap refit a whole match with its verdict (16 matches).  The located matches are
@@ -91,6 +95,7 @@ def test_the_matches_that_located_the_objects_are_the_final_ones(car):
     assert result.matches == [True, True]
 
 
+@pytest.mark.slow
 def test_the_workpiece_is_searched_while_the_reference_is_and_found_alike(car, user_regions, monkeypatch):
     """The two objects' searches ran one after the other on one
     core.  The workpiece's likeliest cluster is now searched on a second thread while the reference
@@ -105,6 +110,7 @@ def test_the_workpiece_is_searched_while_the_reference_is_and_found_alike(car, u
         assert np.array_equal(getattr(alone, f"{role}_match").matrix, getattr(result, role).matrix)
 
 
+@pytest.mark.slow
 def test_a_paper_method_is_the_method_of_both_final_matches(plain):
     """The located match (robust, as regions are found) was kept as the final one
     whatever method the user chose, so an icp calibration reported robust matches."""
@@ -122,6 +128,7 @@ def user_regions(car):
     return models, regions, calibrate(scan.cloud(), *models, regions=regions)
 
 
+@pytest.mark.slow
 def test_user_regions_give_the_same_W(car, user_regions):
     scene, _, _, automatic = car
     result = user_regions[2]
@@ -129,6 +136,7 @@ def test_user_regions_give_the_same_W(car, user_regions):
     assert _errors(result.W, scene.W)[0] < 0.02 and _errors(result.W, automatic.W)[1] < 0.05
 
 
+@pytest.mark.slow
 def test_the_bound_is_the_same_on_one_refit_thread_as_on_two(car, user_regions, monkeypatch):
     """The draws and nudges are made in order, whatever thread refits them and however many are drawn at a time."""
     _, scan, _, _ = car
@@ -139,6 +147,7 @@ def test_the_bound_is_the_same_on_one_refit_thread_as_on_two(car, user_regions, 
     assert calibration.REFIT_THREADS == 1 and two_threads.uncertainty == one_thread.uncertainty
 
 
+@pytest.mark.slow
 def test_result_round_trips_through_json(car, tmp_path):
     result = car[3]
     result.to_json(tmp_path / "result.json")
@@ -148,6 +157,7 @@ def test_result_round_trips_through_json(car, tmp_path):
     assert back.uncertainty == pytest.approx(result.uncertainty)
 
 
+@pytest.mark.slow
 def test_clay_lump_and_carving_do_not_bias_W():
     scene = build_scene("car", seed=5, clay_change=["lump", "carve"])
     scan = _scan(scene)
@@ -157,6 +167,7 @@ def test_clay_lump_and_carving_do_not_bias_W():
     assert rotation < 0.05 and translation < 0.1
 
 
+@pytest.mark.slow
 def test_two_captures_from_one_position_are_merged():
     scene = build_scene("car", seed=1)
     first, second = _scan(scene, seed=1), _scan(scene, seed=2)
@@ -165,6 +176,7 @@ def test_two_captures_from_one_position_are_merged():
     assert result.status == "ok" and _errors(result.W, scene.W)[1] < 0.05
 
 
+@pytest.mark.slow
 def test_progress_is_reported_and_cancel_stops():
     scene = build_scene("car", seed=2)
     scan = _scan(scene)
@@ -181,6 +193,7 @@ def test_progress_is_reported_and_cancel_stops():
         calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), progress=cancel)
 
 
+@pytest.mark.slow
 def test_find_regions_alone():
     scene = build_scene("figurine", seed=0)
     scan = _scan(scene)
@@ -205,6 +218,7 @@ def assert_not_found(result, pattern):
     assert codes(result.reasons) == [NOT_FOUND] and re.search(pattern, str(result.reasons[0])), result.reasons
 
 
+@pytest.mark.slow
 def test_reference_out_of_view_is_named(plain):
     scene, scan = plain
     without = Cloud(scan.points[~scan.mask("reference")], name="scan without block")
@@ -212,6 +226,7 @@ def test_reference_out_of_view_is_named(plain):
                      r"reference object .*not found in scan without block")
 
 
+@pytest.mark.slow
 def test_wrong_reference_model_is_named(plain):
     scene, scan = plain
     wrong = shapes.ellipsoid().transformed(scene.reference.pose)
@@ -219,6 +234,7 @@ def test_wrong_reference_model_is_named(plain):
     assert_not_found(calibrate(scan.cloud(), scene.workpiece_model(), wrong), "reference object ellipsoid.stl: not found")
 
 
+@pytest.mark.slow
 def test_wrong_model_fails_without_polishing_poses_that_cannot_fit(plain, monkeypatch):
     """The wrong model matched on a region (an ellipsoid on the block's points) fails and says why, and
     the poses it is tried in, which miss the scan by many times the verdict's limit, are neither slid
@@ -241,6 +257,7 @@ def test_wrong_model_fails_without_polishing_poses_that_cannot_fit(plain, monkey
     assert calls["refine_exact"] == 0 and calls["refine"] <= 60 and calls["_distances"] == 0, calls
 
 
+@pytest.mark.slow
 def test_workpiece_missing_is_named(plain):
     scene, scan = plain
     without = Cloud(scan.points[~scan.mask("workpiece")], name="empty platform")
@@ -265,6 +282,7 @@ def test_scans_in_different_units_are_refused():
         merge_scans([a, b])
 
 
+@pytest.mark.slow
 def test_toolpath_in_inches_is_refused(plain):
     scene, scan = plain
     toolpath, _ = sample_toolpath_points(scene)
@@ -283,6 +301,7 @@ def test_bad_regions(plain, regions, message):
         calibrate(scan.cloud(), scene.workpiece_model(), scene.reference_model(), regions=regions)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("margin", [10.0, 20.0])
 def test_a_region_drawn_loosely_leaves_out_the_platform_and_the_other_object(margin):
     """A box drawn 10 or 20 mm loosely around the block takes platform points around its foot and some of
@@ -313,6 +332,7 @@ def test_a_region_drawn_loosely_leaves_out_the_platform_and_the_other_object(mar
     assert warned and f"{trimmed['reference']['platform']} points on the platform's plane" in warned[0]
 
 
+@pytest.mark.slow
 def test_points_a_region_takes_that_no_model_explains_are_said_where(plain):
     """A blob of 4000 points (a clamp, a hand) inside the block's region: the region's share explained
     by the model fails, and the reason says how many points lie off the model and where they are."""
@@ -332,6 +352,7 @@ def test_points_a_region_takes_that_no_model_explains_are_said_where(plain):
     assert np.linalg.norm(np.array(where.split(", "), float) - centre) < 5.0
 
 
+@pytest.mark.slow
 def test_a_tolerance_past_a_share_of_the_models_size_is_refused(plain):
     """A tolerance of 1e6 mm (or anything over 5 % of the larger model's diagonal) passes a model
     several percent the wrong size: refused before any work, naming the model."""
@@ -352,6 +373,7 @@ def mat_beside_the_block():
     return scene, result
 
 
+@pytest.mark.slow
 def test_the_platform_points_a_loose_box_takes_are_kept_and_said_where_they_lie(mat_beside_the_block):
     """The user's case: the reference region explained 77 % by its model fails.  The result keeps the
     indices of the points its model leaves unexplained (the mat's, within a few percent), and the why
@@ -383,6 +405,7 @@ def test_the_platform_points_a_loose_box_takes_are_kept_and_said_where_they_lie(
     assert said in result.summary()
 
 
+@pytest.mark.slow
 def test_off_model_points_round_trip_through_result_json(mat_beside_the_block, tmp_path):
     """The off-model indices go to the side file with the regions and come back exactly, their notes with
     them; result.json counts them."""

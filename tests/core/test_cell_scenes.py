@@ -39,6 +39,7 @@ def _calibrated(cell, **options):
                      options=CalibrationOptions(resamples=2, **options))
 
 
+@pytest.mark.slow
 def test_scan_exported_in_a_table_frame_with_its_origin_under_the_table():
     """Failure 1 of the issue: "up" was taken towards the scan's origin, so a scan in a table frame
     whose origin lies under the table lost every point as "below the platform"."""
@@ -50,6 +51,7 @@ def test_scan_exported_in_a_table_frame_with_its_origin_under_the_table():
     assert rotation < 0.05 and displacement < 0.1
 
 
+@pytest.mark.slow
 def test_a_whole_scene_moved_by_any_rigid_motion_calibrates_to_the_same_W():
     cell = cell_scan(CellSpec(seed=2))
     first = _calibrated(cell)
@@ -62,6 +64,7 @@ def test_a_whole_scene_moved_by_any_rigid_motion_calibrates_to_the_same_W():
         assert again.status == "ok" and rotation < 0.01 and displacement < 0.01, (rotation, displacement)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("layout, seed, frame, statuses", [
     ("touching", 0, "sensor", ("ok",)), ("bridge", 0, "sensor", ("ok", "ambiguous")),
     ("touching", 1, "arbitrary", ("ok", "ambiguous")), ("touching", 4, "arbitrary", ("ok", "ambiguous"))])
@@ -92,6 +95,7 @@ def test_touching_or_bridged_objects_are_split_by_their_models(layout, seed, fra
         assert own[region].mean() > 0.97
 
 
+@pytest.mark.slow
 def test_a_rival_the_scan_alone_cannot_reject_is_ruled_out_by_free_space():
     """Failure 3 of the issue: seen low from one side, the L-block fits turned half round as well as
     the right way; from where the scanner stood, the turned block would stand where it saw through to
@@ -124,6 +128,7 @@ def _with_sunk_rivals(monkeypatch, cell, count):
     monkeypatch.setattr(calibration, "_refit", refit)
 
 
+@pytest.mark.slow
 def test_platform_contact_rules_out_rivals_that_sink_through_it(monkeypatch):
     cell = cell_scan(CellSpec(seed=3))
     _with_sunk_rivals(monkeypatch, cell, 2)
@@ -133,6 +138,7 @@ def test_platform_contact_rules_out_rivals_that_sink_through_it(monkeypatch):
     assert frames.rotation_between_deg(result.V, cell.V) < 0.05
 
 
+@pytest.mark.slow
 def test_rivals_past_max_ruled_out_leave_the_tie_standing_though_all_sink(monkeypatch):
     """A view that fits the reference in many listed ways may fit it in one the search did not list."""
     cell = cell_scan(CellSpec(seed=3))
@@ -142,6 +148,7 @@ def test_rivals_past_max_ruled_out_leave_the_tie_standing_though_all_sink(monkey
     assert MANY_WAYS in codes(result.reasons), result.reasons
 
 
+@pytest.mark.slow
 def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_over():
     """Seen low from its outer side, the L-block calibrated "ok" with V 180 deg off
     (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC
@@ -204,6 +211,7 @@ def bridge_scene():
     return cell, _calibrated(cell, seed=1)
 
 
+@pytest.mark.slow
 def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_ok(bridge_scene):
     """Clay joining the objects, seen so that the L-block turned half round stands on the platform and
     explains 2285 of its 3077 points: that pose was reported ok, 180 deg off.  The points of the
@@ -216,6 +224,7 @@ def test_a_split_that_leaves_much_of_the_touching_objects_unexplained_is_never_o
         assert {SPLIT_UNEXPLAINED, SEARCH_DOUBT} & set(codes(result.reasons)), result.reasons
 
 
+@pytest.mark.slow
 def test_a_refit_that_moves_from_the_searched_pose_says_whose_doubt_it_keeps(bridge_scene):
     """The scene above: whatever its reference search settles on, W is right when it is "ok".  And a
     refit that moves from the pose an ambiguous search placed the block in (its region picked with
@@ -279,6 +288,7 @@ def _distorted(cell, strain: np.ndarray, seed: int):
     return distorted.moved(frames.random_motion(np.random.default_rng(seed), shift_mm=3000.0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, strain", [
     (0, np.diag([0.002, 0.002, 0.002])),  # 0.2 % too large
     (1, np.diag([-0.005, -0.005, -0.005])),  # 0.5 % too small
@@ -303,6 +313,7 @@ def test_a_scan_distorted_by_its_scanner_fails_and_says_so(seed, strain):
     assert 0.7 * displacement < u["distortion_shift_mm"] < 1.2 * displacement
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, scale", [(1, 0.02), (2, -0.02)])
 def test_a_scan_scaled_two_percent_is_refused_for_its_scale(seed, scale):
     """A 2 % scale put the reference's ends beyond the check's gate (twice the tolerance, 0.6 mm), its
@@ -319,6 +330,7 @@ def test_a_scan_scaled_two_percent_is_refused_for_its_scale(seed, scale):
     assert result.status == "failed" and DISTORTION in codes(result.reasons), result.reasons
 
 
+@pytest.mark.slow
 def test_a_scan_within_a_good_scanners_accuracy_stays_ok():
     """An undistorted scan and one 0.05 % too large (a good structured-light scanner's accuracy) are
     "ok", and W is off by no more than the distortion's share of the tolerance and the spread allow."""
@@ -332,6 +344,7 @@ def test_a_scan_within_a_good_scanners_accuracy_stays_ok():
         assert displacement < u["distortion_shift_mm"] + u["surface_bound_mm"], (scale, displacement, u)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, azimuth", [(1, 89.0), (3, 233.0)])
 def test_a_real_range_scan_differing_from_its_model_is_not_a_distorted_scanner(bunny, seed, azimuth):
     """A real range scan of the bunny strains 0.3-0.5 % against the bunny's model (a range scan and the
@@ -348,6 +361,7 @@ def test_a_real_range_scan_differing_from_its_model_is_not_a_distorted_scanner(b
     assert any("taken as the part's own" in w for w in result.warnings), result.warnings
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, azimuth", [(2, 120.0), (2, 240.0)])
 def test_a_strain_the_reference_does_not_confirm_is_a_warning_not_a_refusal(bunny, seed, azimuth):
     """The bunny's real range scan touching the block, the scanner where the scan's origin is: the block
@@ -367,6 +381,7 @@ def test_a_strain_the_reference_does_not_confirm_is_a_warning_not_a_refusal(bunn
     assert warned and "were it the scanner's, W would move up to" in warned[0], result.warnings
 
 
+@pytest.mark.slow
 def test_an_undistorted_noisy_low_view_is_not_refused_for_distortion():
     """Found by random scenes varying what the scenes benchmark keeps fixed (noise, view, stray points):
     an undistorted car scene at 0.2 mm noise, the L-block seen low (25 deg), read a -0.16 %

@@ -85,6 +85,7 @@ def test_a_scan_of_points_on_a_line_fails_in_calibrate_as_in_match(scene, tmp_pa
     assert "Traceback" not in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_sub_millimetre_model_fails_with_a_unit_warning(scene, tmp_path, capsys):
     write_xyz(tmp_path / "tiny.xyz", Cloud(np.random.default_rng(0).normal(size=(2000, 3)) * 0.01))
     assert main(["match", str(scene / "scan.ply"), str(tmp_path / "tiny.xyz")]) == 1
@@ -138,6 +139,7 @@ def test_out_under_proc_exits_3_before_any_work(scene, tmp_path, capsys, no_cali
     one_line_error(capsys, "/proc/prog.nc")
 
 
+@pytest.mark.slow
 def test_a_file_size_limit_while_writing_exits_3_and_leaves_nothing(scene, tmp_path):
     out = tmp_path / "out"
     code, err = run_in_a_process(calibrate(scene, out), tmp_path, 600,
@@ -217,6 +219,7 @@ def test_an_index_that_is_not_a_whole_number_names_its_line(scene, tmp_path, cap
     one_line_error(capsys, "workpiece.txt: line 3", "'1.5'")
 
 
+@pytest.mark.slow
 def test_a_model_in_the_wrong_unit_is_warned_about_with_the_option_to_use(scene, tmp_path, capsys):
     model = read_cloud(scene / "workpiece.ply")
     write_ply(tmp_path / "workpiece_m.ply", Cloud(model.points / 1000, triangles=model.triangles))
@@ -229,6 +232,7 @@ def test_a_model_in_the_wrong_unit_is_warned_about_with_the_option_to_use(scene,
     assert "objects tried: 0" not in reasons[0]["text"]
 
 
+@pytest.mark.slow
 def test_a_tolerance_below_the_scan_noise_says_so(coarse_scene, tmp_path):
     assert main(calibrate(coarse_scene, tmp_path / "o", "--tolerance", "0.01")) == 1
     reasons = json.loads((tmp_path / "o" / "result.json").read_text())["reasons"]
@@ -236,6 +240,7 @@ def test_a_tolerance_below_the_scan_noise_says_so(coarse_scene, tmp_path):
     assert "below the scan's noise" in reasons[0]["text"] and "is the reference in view" not in reasons[0]["text"]
 
 
+@pytest.mark.slow
 def test_one_absurd_point_is_dropped_with_a_warning_not_taken_for_a_unit(scene, tmp_path, capsys):
     scan = read_cloud(scene / "scan.ply")
     write_ply(tmp_path / "scan.ply", Cloud(np.vstack([scan.points, [[1e308, 0, 0]]])))
@@ -256,6 +261,7 @@ def test_stray_points_far_from_the_rest_are_named_not_taken_for_a_unit(tmp_path)
     assert not any("micrometres" in w for w in warnings)
 
 
+@pytest.mark.slow
 def test_the_same_cause_has_the_same_exit_status_in_match_and_calibrate(coarse_scene, tmp_path):
     """A model that is not in the scan: the job ran and failed (1) in both, not 'bad input' in one."""
     u, v = np.meshgrid(np.linspace(0, np.pi, 40), np.linspace(0, 2 * np.pi, 80))

@@ -20,6 +20,7 @@ FACES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
 QUERIES = [[5, 5, 2], [20, 5, 5], [5, -3, 5], [13, 14, 5]]
 
 
+@pytest.mark.slow
 def test_faces_folded_to_an_edge_or_a_point_are_dropped_with_a_warning_not_a_crash(tmp_path):
     points = np.vstack([CORNERS, CORNERS[1]])  # vertex 8 written where vertex 1 is
     faces = FACES + [(1, 1, 2), (1, 8, 2), (3, 3, 3)]
@@ -51,6 +52,7 @@ def _run(script: str, timeout: float = 60) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", head + script], capture_output=True, text=True, timeout=timeout)
 
 
+@pytest.mark.slow
 def test_a_query_point_that_is_not_finite_in_float32_gets_nan_not_a_crash():
     """open3d aborts on a NaN or infinite query point (the same Eigen assertion); 1e300 is infinite
     once held in float32.  A pose gone NaN would take FreeCAD down with it."""
@@ -67,6 +69,7 @@ def test_a_query_point_that_is_not_finite_in_float32_gets_nan_not_a_crash():
     assert np.allclose(normals[[0, 3]], [[0, 0, -1], [1, 0, 0]])
 
 
+@pytest.mark.slow
 def test_corners_a_float32_hair_apart_count_as_one_point():
     """Two corners 1e-40 mm apart about the vertices' mean are distinct float32 numbers (denormals),
     but the edge's squared length is 0 in float32: open3d aborted on that face as on a repeated corner."""
@@ -80,6 +83,7 @@ def test_corners_a_float32_hair_apart_count_as_one_point():
     assert any("1 faces with two corners at one point" in w for w in warnings), warnings
 
 
+@pytest.mark.slow
 def test_repeated_faces_are_dropped_with_a_warning_not_sampled_without_bound():
     """Samples follow the faces' area: 500 copies of each face of a box asked for 62 million samples
     (minutes), a million faces on one edge for 10 billion (78 GB).  A copy covers nothing new."""
@@ -94,6 +98,7 @@ def test_repeated_faces_are_dropped_with_a_warning_not_sampled_without_bound():
     assert any("box.stl" in w and f"{len(repeated) - 12} faces repeating" in w for w in warnings), warnings
 
 
+@pytest.mark.slow
 def test_faces_folded_onto_each_other_are_sampled_within_a_budget(monkeypatch):
     """Layers of faces a hair apart are not copies, but ask for as many samples: the spacing grows to
     keep the samples within MAX_MESH_SAMPLES, the model says why, and distances stay exact."""
@@ -126,6 +131,7 @@ def test_a_mesh_whose_faces_all_cover_nothing_is_refused_naming_the_file(tmp_pat
         SurfaceModel(read_cloud(path))
 
 
+@pytest.mark.slow
 def test_vertices_no_face_uses_are_dropped_with_a_warning():
     """A stray vertex (a modeller's leftover) set a mesh model's size, so its sample spacing and the
     origin of its float32 distances, and its shape: a flat square with one passed as a solid."""

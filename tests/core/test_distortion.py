@@ -25,6 +25,7 @@ def _measured(cell, linear: np.ndarray) -> dict:
     return distortion(moved, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
 
 
+@pytest.mark.slow
 def test_a_scale_is_measured(cell, monkeypatch):
     """What a scale adds to what the undistorted scan shows (its noise, counted here however small:
     0.005-0.013 % over eight such scenes at 0.1 mm of noise, 0.006-0.013 % before the foot became the
@@ -71,6 +72,7 @@ def test_a_turned_scan_is_not_strained(cell):
     assert abs(found["shift_mm"] - undistorted["shift_mm"]) < 0.01, found
 
 
+@pytest.mark.slow
 def test_strains_a_small_part_beside_flat_faces_cannot_show_are_not_read_from_noise(monkeypatch):
     """A 15 mm figurine beside the L-shaped reference: some stretches and shears are nearly rigid on both,
     and read along those the undistorted scan's noise came out as a 0.2 % strain (a tester's figurine
@@ -87,6 +89,7 @@ def test_strains_a_small_part_beside_flat_faces_cannot_show_are_not_read_from_no
     assert distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])["largest_strain_pct"] < 0.03
 
 
+@pytest.mark.slow
 def test_noise_at_a_blocks_edges_is_not_read_as_a_strain():
     """The L-block seen low (25 deg) through 0.35 mm of range noise, at the true poses: near its edges a
     point pushed into the block is nearer the side face, so measured against its closest face its noise

@@ -39,6 +39,7 @@ def _slide_error(V, V_true, surface, direction):
     return abs(along), float(np.linalg.norm(shift - along * direction))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("noise_mm", [0.1, 0.0])
 def test_block_seen_on_two_faces_is_centred_between_its_edges(block, noise_mm):
     scanner, scene, surface, direction = block
@@ -79,6 +80,7 @@ def test_exact_surface_pulls_a_point_past_an_edge_back(block):
     assert along < 0.1  # from 0.5 mm; the flat bottom of the valley is the centring's job
 
 
+@pytest.mark.slow
 def test_closest_points_on_a_box_are_exact():
     surface = SurfaceModel(shapes.box((40.0, 30.0, 20.0), edge_mm=5.0))  # x, y in +-20, +-15; z in [-20, 0]
     queries = np.array([[0.0, 0.0, 1.0], [25.0, 0.0, -10.0], [23.0, 18.0, 2.0], [0.0, 0.0, -3.0]])
@@ -111,6 +113,7 @@ def plate_views():
             for c in cases}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, along", [("notched plate #4", (1.0, 0.0, 0.0)),  # 0.15 mm noise: 3 sigma ate the reach
                                           ("near-square plate #2", (0.0, 1.0, 0.0))])  # a noisier side face's tail
 def test_plate_slide_held_by_the_outline_of_the_face_it_shows(plate_views, name, along):

@@ -119,6 +119,7 @@ HOSTILE = ["\n", "\r", "\r\n", "\x00", "\x0b", "\x0c", "\x1c", "\x1e", "\x7f", "
 TEXT = st.lists(st.one_of(st.sampled_from(HOSTILE), st.text(max_size=6)), min_size=1, max_size=6).map("".join)
 
 
+@pytest.mark.slow
 def test_no_text_from_outside_writes_into_a_program(folder):
     """Arbitrary text in every slot an export writes from outside (the toolpath file's name, its header
     and move comments, the reader's warnings, the calibration file's name, its reasons and gate names,

@@ -44,6 +44,7 @@ def _errors(result, U, surface):
     return pose_errors(result.matrix, U, surface.vertices)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workpiece, seed, max_deg, max_mm", [
     ("car", 1, 0.01, 0.03), ("car", 2, 0.01, 0.03), ("figurine", 1, 0.3, 0.05)])
 def test_recovers_U_from_a_random_pose_without_a_guess(workpiece, seed, max_deg, max_mm):
@@ -55,6 +56,7 @@ def test_recovers_U_from_a_random_pose_without_a_guess(workpiece, seed, max_deg,
     assert result.fitness > 0.99 and result.rms_mm < 0.15  # 0.1 mm scanner noise
 
 
+@pytest.mark.slow
 def test_partial_overlap(car):
     points, surface, U = car
     part = with_overlap(points, np.random.default_rng(4), fraction=0.4)
@@ -74,6 +76,7 @@ def test_clutter_table_box_and_stray_points(car):
     assert 0.3 < result.fitness < 0.5  # the part is about 40 % of the scene
 
 
+@pytest.mark.slow
 def test_clay_added_and_carved_does_not_pull_the_pose():
     points, model, U = _capture("car", seed=6, clay_change=["lump", "carve"])
     result = match(Cloud(points), model)
@@ -109,6 +112,7 @@ def _symmetric_capture(mesh, seed=1):
     return scan.points[scan.mask("workpiece")], scan.U
 
 
+@pytest.mark.slow
 def test_cylinder_is_under_constrained_about_its_axis():
     points, _ = _symmetric_capture(shapes.cylinder())
     result = match(Cloud(points), shapes.cylinder())
@@ -118,6 +122,7 @@ def test_cylinder_is_under_constrained_about_its_axis():
     assert len(axes) == 1 and abs(axes[0][2]) > 0.99 and np.hypot(*axes[0][3:5]) < 1.0  # the z axis
 
 
+@pytest.mark.slow
 def test_sphere_leaves_three_rotations_about_its_centre_free():
     points, _ = _symmetric_capture(shapes.sphere())
     result = match(Cloud(points), shapes.sphere())
@@ -128,6 +133,7 @@ def test_sphere_leaves_three_rotations_about_its_centre_free():
     assert len(_axes(result, "rotation")) == 3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mesh, orders", [(shapes.box((80.0, 50.0, 30.0), edge_mm=2.0), [2, 2, 2]),
                                            (shapes.ellipsoid(), [2, 2, 2]), (shapes.vase(), [0])],
                          ids=["box", "ellipsoid", "vase"])
@@ -150,6 +156,7 @@ def test_symmetric_part_is_ambiguous_and_names_its_symmetries(mesh, orders):
         assert not surface.maps_onto_itself(frames.invert(twin) @ result.matrix)
 
 
+@pytest.mark.slow
 def test_scan_of_something_else_fails(car):
     _, surface, _ = car
     points, _ = _symmetric_capture(shapes.sphere(60.0))
@@ -158,6 +165,7 @@ def test_scan_of_something_else_fails(car):
     assert {FEW_POINTS, MISFIT} & set(codes(result.reasons)), result.reasons
 
 
+@pytest.mark.slow
 def test_flat_face_of_a_block_on_a_car_panel_is_not_trusted(car):
     """One face of the L-block fits a gently curved panel of the car to 0.3 mm; what gives it away
     is that such a fit can slide: it must not come back "ok"."""
@@ -232,6 +240,7 @@ def bunny_set(bunny):
     return _bunny_set(bunny)
 
 
+@pytest.mark.slow
 def test_bunny_scans_every_degradation(bunny_set):
     """Every degradation is matched; the noisy one (0.5 mm added) only at a tolerance above its noise."""
     surface = SurfaceModel(bunny_set[0].model)
@@ -246,6 +255,7 @@ def test_bunny_scans_every_degradation(bunny_set):
             assert match(Cloud(case.scan), surface).status == "failed"
 
 
+@pytest.mark.slow
 def test_bunny_scan_against_the_car_model_fails(bunny_set, car):
     result = match(Cloud(bunny_set[0].scan), car[1])
     assert result.status == "failed"
@@ -280,6 +290,7 @@ def _warped_car_scan(amplitude_mm: float):
     return mesh, Cloud(points, name="warped car"), captured.V
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("amplitude_mm, status", [(0.5, "ok"), (1.0, "failed")])
 def test_a_match_is_ok_only_as_a_calibration_gate_would_pass_its_region(amplitude_mm, status):
     """A car scanned at 0.05 mm noise whose surface waves against its model: at 0.5 mm the fit's RMS is
@@ -294,6 +305,7 @@ def test_a_match_is_ok_only_as_a_calibration_gate_would_pass_its_region(amplitud
         assert RMS in codes(result.reasons) and result.rms_mm > 0.3
 
 
+@pytest.mark.slow
 def test_a_fit_worse_than_the_noise_asks_more_standard_errors_of_a_rival():
     """The car whose surface waves 1 mm against its model, matched to a 1 mm tolerance: the fit is
     several times its 0.05 mm noise, so a rival must be more standard errors behind the best than

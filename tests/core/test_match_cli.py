@@ -28,6 +28,7 @@ def files(tmp_path_factory):
     return folder, motion @ scan.U
 
 
+@pytest.mark.slow
 def test_match_prints_a_summary_and_writes_U_as_json(files, tmp_path, capsys):
     folder, U = files
     out = tmp_path / "match.json"
@@ -43,6 +44,7 @@ def test_match_prints_a_summary_and_writes_U_as_json(files, tmp_path, capsys):
     assert printed.startswith("OK") and "Euler ZYZ" in printed and str(out) in printed
 
 
+@pytest.mark.slow
 def test_a_match_with_no_rival_does_not_import_open3d(files, tmp_path):
     """The far-off test's exact distances to a mesh go through open3d's BVH, whose import alone takes
     ~0.3 s and ~50 MB of a match process; a match whose verdict has no rival to weigh needs none of
@@ -85,6 +87,7 @@ def test_wrong_units_are_a_failed_match_with_a_warning(files, capsys):
     assert code in (1, 2) and "metres" in captured.out + captured.err
 
 
+@pytest.mark.slow
 def test_scan_without_the_model_exits_1_and_says_why(files, tmp_path, capsys):
     folder, _ = files
     out = tmp_path / "failed.json"
@@ -123,6 +126,7 @@ def test_bench_is_a_subcommand():
     assert args.command == "bench" and args.quick and str(args.out) == "table.md"
 
 
+@pytest.mark.slow
 def test_viewpoint_of_a_scan_in_the_scanner_frame(tmp_path, capsys):
     """A scan left in the scanner's own frame: --viewpoint 0 0 0 (in the scan's units) is used as
     given; a viewpoint behind the part is refused with a warning and the viewpoint estimated."""

@@ -4,6 +4,7 @@ import gc
 import weakref
 
 import numpy as np
+import pytest
 
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.surface import SurfaceModel
@@ -227,6 +228,7 @@ print(before, after_free, resident_mb())
     assert handed_back < after_free - 40
 
 
+@pytest.mark.slow
 def test_prepare_and_match_hand_back_the_heap_they_leave(monkeypatch):
     """A model's preparation and each match free large temporaries: both hand the heap back when done."""
     from workcal_wb.core import match as match_module

@@ -57,6 +57,7 @@ def _entries(folder: Path) -> list:
     return sorted(folder.glob(f"*{SUFFIX}"))
 
 
+@pytest.mark.slow
 def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path, monkeypatch):
     folder, U = files
     scan = read_cloud(folder / "scan.ply")
@@ -79,6 +80,7 @@ def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path
     assert not warm.store()  # nothing grew: nothing written again
 
 
+@pytest.mark.slow
 def test_a_changed_model_file_unit_or_option_misses(files, tmp_path):
     folder, _ = files
     ModelCache(tmp_path).model_file(folder / "car.ply")
@@ -108,6 +110,7 @@ def test_a_changed_model_file_unit_or_option_misses(files, tmp_path):
     assert again.hits == 1 and moved.misses == 1
 
 
+@pytest.mark.slow
 def test_a_truncated_corrupt_or_foreign_file_is_prepared_again(files, tmp_path):
     folder, _ = files
     scan = read_cloud(folder / "scan.ply")
@@ -148,6 +151,7 @@ def _with_header(data: bytes, length: int, header: dict) -> bytes:
     return MAGIC + struct.pack("<Q", length) + text + data[len(MAGIC) + 8 + length:]
 
 
+@pytest.mark.slow
 def test_two_processes_filling_one_entry_both_succeed(files, tmp_path):
     folder, _ = files
     cache = tmp_path / "cache"
@@ -166,6 +170,7 @@ def test_two_processes_filling_one_entry_both_succeed(files, tmp_path):
     assert after.hits == 1
 
 
+@pytest.mark.slow
 def test_the_folder_stays_bounded_least_recently_used_first(files, tmp_path):
     folder, _ = files
     clouds = []
@@ -199,6 +204,7 @@ def test_the_default_folder_is_the_users_cache_folder(monkeypatch, tmp_path):
         assert default_folder() == tmp_path / "home" / ".cache" / "workcal" / "models"
 
 
+@pytest.mark.slow
 def test_match_command_cache_options(files, tmp_path, capsys, monkeypatch):
     folder, _ = files
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))  # this test's own "user cache folder"
@@ -215,6 +221,7 @@ def test_match_command_cache_options(files, tmp_path, capsys, monkeypatch):
     assert len(_entries(tmp_path / "xdg" / "workcal" / "models")) == 1  # --cache DIR left the default alone
 
 
+@pytest.mark.slow
 def test_calibrate_gives_the_same_result_cold_warm_and_without_cache(tmp_path):
     """The whole calibrate command, as a user runs it twice, and once with --no-cache: one result.json."""
     from workcal_wb.cli.simulate import write_simulation
@@ -234,6 +241,7 @@ def test_calibrate_gives_the_same_result_cold_warm_and_without_cache(tmp_path):
     assert json.dumps(results["cold"], sort_keys=True) == json.dumps(results["off"], sort_keys=True)
 
 
+@pytest.mark.slow
 def test_a_cache_folder_that_cannot_be_written_is_a_warning_not_a_failure(files, tmp_path, capsys):
     folder, _ = files
     (tmp_path / "a file").write_text("x")

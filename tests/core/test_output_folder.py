@@ -72,6 +72,7 @@ def fresh_copy(ok_run, scene, tmp_path) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_a_failed_calibration_leaves_no_program_of_the_earlier_run(ok_run, scene, tmp_path):
     # The finding: the first run's program, "status ok", stayed beside a result.json that says "failed".
     out = fresh_copy(ok_run, scene, tmp_path)
@@ -85,6 +86,7 @@ def test_a_failed_calibration_leaves_no_program_of_the_earlier_run(ok_run, scene
     assert (out / "notes.txt").read_text() == "the operator's notes\n"  # not an output: never touched
 
 
+@pytest.mark.slow
 def test_a_run_that_finds_no_workpiece_leaves_no_earlier_result(ok_run, scene, tmp_path):
     # The finding: exit 2 and the whole old set, result.json "ok" included, stayed.
     out = fresh_copy(ok_run, scene, tmp_path)
@@ -103,6 +105,7 @@ def test_a_run_that_finds_no_workpiece_leaves_no_earlier_result(ok_run, scene, t
     assert_manifest_is_the_folder(out, "failed")
 
 
+@pytest.mark.slow
 def test_bad_input_after_an_ok_run_removes_the_earlier_set(ok_run, scene, tmp_path, capsys):
     out = fresh_copy(ok_run, scene, tmp_path)
     broken = tmp_path / "broken.ply"
@@ -114,6 +117,7 @@ def test_bad_input_after_an_ok_run_removes_the_earlier_set(ok_run, scene, tmp_pa
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]  # nothing stale beside the error
 
 
+@pytest.mark.slow
 def test_an_interrupt_before_the_program_leaves_the_earlier_set_whole(ok_run, scene, tmp_path, monkeypatch):
     # The finding: SIGINT between the writes left a new result.json beside the old program.
     out = fresh_copy(ok_run, scene, tmp_path)
@@ -127,6 +131,7 @@ def test_an_interrupt_before_the_program_leaves_the_earlier_set_whole(ok_run, sc
     assert snapshot(out) == before
 
 
+@pytest.mark.slow
 def test_the_result_and_program_are_in_before_the_report(ok_run, scene, tmp_path, monkeypatch, capsys):
     """The critical path first: result.json and the program are committed as a set before the report's
     figures are drawn; an interrupt while drawing them leaves that set (never the earlier report)."""
@@ -147,6 +152,7 @@ def test_the_result_and_program_are_in_before_the_report(ok_run, scene, tmp_path
     assert "the report was not written" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_program_in_another_format_replaces_the_earlier_one(ok_run, scene, tmp_path):
     out = fresh_copy(ok_run, scene, tmp_path)
     args = calibrate_args(scene, out)
@@ -156,6 +162,7 @@ def test_a_program_in_another_format_replaces_the_earlier_one(ok_run, scene, tmp
     assert_manifest_is_the_folder(out, "ok")
 
 
+@pytest.mark.slow
 def test_an_export_refused_as_unsafe_exits_1_and_leaves_no_program(ok_run, scene, tmp_path, capsys):
     out = fresh_copy(ok_run, scene, tmp_path)
     assert main(calibrate_args(scene, out, "--method", "icp", "--tolerance", "0.001")) == 1
@@ -264,6 +271,7 @@ def test_a_part_being_written_by_a_running_process_is_left_alone(toolpath_files)
     os.sync()
 
 
+@pytest.mark.slow
 def test_the_program_names_the_result_json_beside_it(ok_run, scene, tmp_path):
     """The program's header carries the SHA-256 of the result.json of its set (as the manifest lists
     it), also when the program is written later from that file by ``toolpath``."""
@@ -339,6 +347,7 @@ def test_a_commit_killed_at_any_step_leaves_a_whole_set_or_none_a_reader_takes(t
     assert limit >= 4  # the manifest, the old program and report, the two new files: every step was killed once
 
 
+@pytest.mark.slow
 def test_a_result_json_that_its_manifest_does_not_list_is_refused(ok_run, scene, tmp_path, capsys):
     out = fresh_copy(ok_run, scene, tmp_path)
     result = json.loads((out / "result.json").read_text())

@@ -27,6 +27,7 @@ def _mean_distance(points, surface, T, gate):
     return np.minimum(surface.exact_distance(frames.apply(T, points)), gate).mean()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["icp", "hausdorff"])
 def test_converges_from_a_nearby_start(car, method):
     points, surface, U = car
@@ -39,6 +40,7 @@ def test_converges_from_a_nearby_start(car, method):
     assert _mean_distance(points, surface, state.T, gate) < 0.1 * _mean_distance(points, surface, start, gate)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["icp", "hausdorff"])
 def test_selectable_by_name_after_the_global_search(car, method):
     points, surface, U = car
@@ -117,6 +119,7 @@ def test_a_grid_shared_by_two_threads_answers_as_a_grid_used_by_one(car):
     assert not errors
     assert all(np.array_equal(f, expected[i]) for i, fs in found.items() for f in fs)
 
+@pytest.mark.slow
 def test_paper_methods_on_a_real_bunny_scan(bunny):
     case = bunny_cases(bunny, seed=4, scans=("bun090.ply",))[0]  # the clean scan
     surface = SurfaceModel(case.model)

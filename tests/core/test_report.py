@@ -41,6 +41,7 @@ def written(lumpy, tmp_path_factory):
     return paths, paths["html"].read_text(encoding="utf-8"), json.loads(paths["json"].read_text(encoding="utf-8"))
 
 
+@pytest.mark.slow
 def test_report_files_are_written_and_self_contained(written):
     paths, page, _ = written
     assert set(paths) == {"html", "json"} and all(p.is_file() for p in paths.values())
@@ -66,6 +67,7 @@ def _same(a, b):
     return a == b
 
 
+@pytest.mark.slow
 def test_report_json_holds_the_calibration_numbers(written, lumpy):
     _, _, data = written
     result = lumpy[2]
@@ -81,6 +83,7 @@ def test_report_json_holds_the_calibration_numbers(written, lumpy):
     assert sum(deviation["histogram"]["counts"]) == deviation["n_points"]
 
 
+@pytest.mark.slow
 def test_html_shows_status_matrices_and_residuals(written, lumpy):
     _, page, _ = written
     result = lumpy[2]
@@ -98,6 +101,7 @@ def test_html_shows_status_matrices_and_residuals(written, lumpy):
     assert f"{result.uncertainty['surface_edge_bias_mm']:.4f}" in page and "at least 95 times in 100" in page
 
 
+@pytest.mark.slow
 def test_deviation_map_shows_the_lump_and_the_carving(lumpy):
     scene, scan, result = lumpy
     points = scan.points[scan.mask("workpiece")]
@@ -117,6 +121,7 @@ def test_deviation_map_shows_the_lump_and_the_carving(lumpy):
     assert np.nanpercentile(np.abs(deviations[untouched]), 95) < result.tolerance_mm
 
 
+@pytest.mark.slow
 def test_report_json_deviation_statistics_show_the_lump(written, lumpy):
     _, _, data = written
     lump_height = lumpy[0].reshaped.displacement_mm.max()
@@ -136,6 +141,7 @@ def _failing_fsync(calls_before_failure):
     return fsync
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("calls_before_failure", [0, 1])  # failing while writing report.json / report.html
 def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, calls_before_failure):
     result = lumpy[2]
@@ -146,6 +152,7 @@ def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, 
     assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".*.part"))
 
 
+@pytest.mark.slow
 def test_a_failed_rewrite_keeps_the_previous_report(lumpy, tmp_path, monkeypatch):
     result = lumpy[2]
     write_report(result, tmp_path, title="first")
@@ -169,6 +176,7 @@ def test_failed_calibration_report_says_why(tmp_path):
     assert data["status"] == "failed" and data["W"] is None and data["deviation"] is None
 
 
+@pytest.mark.slow
 def test_studies_are_embedded_in_the_report(lumpy, tmp_path):
     fig = new_figure(3, 2)
     fig.subplots().plot([0, 1], [1, 0])
@@ -188,6 +196,7 @@ def test_studies_are_embedded_in_the_report(lumpy, tmp_path):
     assert data["studies"][0]["name"] == "made-up" and data["studies"][0]["passed"] is False
 
 
+@pytest.mark.slow
 def test_report_names_the_symmetry_of_a_symmetric_workpiece(tmp_path):
     """A workpiece with a four-fold symmetry (a square plate with a square boss): the calibration is
     ambiguous and the report says which turn gives the same surface, in words."""
@@ -206,6 +215,7 @@ def test_report_names_the_symmetry_of_a_symmetric_workpiece(tmp_path):
     assert "workpiece model symmetry: turning the part 90 degrees" in result.summary()
 
 
+@pytest.mark.slow
 def test_a_report_is_written_without_matplotlib_the_studies_or_the_simulator(tmp_path):
     """The report's pictures are drawn with numpy (picture.py): writing one imports no matplotlib,
     whose import and rendering cost a calibrate process more than a second, and neither the studies
@@ -309,6 +319,7 @@ def _figures(page: str, alt_start: str) -> list:
             re.findall(rf'<img alt="{re.escape(alt_start)}[^"]*" src="data:image/png;base64,([^"]+)"', page)]
 
 
+@pytest.mark.slow
 def test_the_report_says_and_draws_the_points_a_region_s_model_leaves_unexplained(tmp_path):
     """A reference box drawn loosely around the block and a band of the platform beside it: the regions
     section says how many of its points lie off the block's placed model, where and what to change; the
@@ -344,6 +355,7 @@ def test_the_report_says_and_draws_the_points_a_region_s_model_leaves_unexplaine
         assert not np.all(image == magenta, axis=2).any()
 
 
+@pytest.mark.slow
 def test_a_report_without_the_scan_says_the_regions_but_draws_none(written):
     """Without the scan there is nothing to draw the regions in: the regions section still says what
     lies off each model."""

@@ -301,6 +301,7 @@ def test_an_unreachable_pose_has_no_branch_and_a_near_one_only_the_front_ones():
     assert exists[[0, 1, 4, 5]].all() and not exists[[2, 3, 6, 7]].any()
 
 
+@pytest.mark.slow
 def test_one_hundred_thousand_poses_solve_in_one_call():
     """No per-pose loop: 100k poses in one call give the same branches as the same poses solved apart."""
     robot = load_robot("kuka_kr16_2")

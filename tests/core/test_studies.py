@@ -27,6 +27,7 @@ def studies(tmp_path_factory):
     return out, results, messages
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(STUDIES))
 def test_study_writes_figure_csv_and_json_that_agree(studies, name):
     _, results, messages = studies
@@ -54,6 +55,7 @@ def test_study_writes_figure_csv_and_json_that_agree(studies, name):
     assert sum(m.startswith(name) for m in messages) == len(result.rows)  # one progress line per calibration
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(STUDIES))
 def test_targets_are_judged_from_their_values(studies, name):
     for t in studies[1][name].targets:
@@ -63,6 +65,7 @@ def test_targets_are_judged_from_their_values(studies, name):
             assert t["passed"] == (t["value"] <= t["limit"] if t["comparison"] == "<=" else t["value"] >= t["limit"])
 
 
+@pytest.mark.slow
 def test_repeatability_agrees_with_the_true_W(studies):
     result = studies[1]["repeatability"]
     true_omega = frames.omega(build_scene("car", seed=QUICK.seed).W)  # independent of the study's bookkeeping
@@ -77,6 +80,7 @@ def test_repeatability_agrees_with_the_true_W(studies):
     assert result.summary["true_omega_deg"] == pytest.approx(true_omega)
 
 
+@pytest.mark.slow
 def test_placement_table1_has_the_papers_format(studies):
     result = studies[1]["placement"]
     k = result.summary["positions"]
@@ -92,6 +96,7 @@ def test_placement_table1_has_the_papers_format(studies):
     assert json.loads(text)["tables"]["table1"] == table
 
 
+@pytest.mark.slow
 def test_placement_U_and_V_move_with_the_scanner_while_W_stays(studies):
     result = studies[1]["placement"]
     rows = [r for r in result.rows if r["W_omega_deg"] is not None]
@@ -106,6 +111,7 @@ def test_placement_U_and_V_move_with_the_scanner_while_W_stays(studies):
         assert row["U_true_omega_deg"] == pytest.approx(row["U_omega_deg"], abs=0.02)
 
 
+@pytest.mark.slow
 def test_placement_checks_the_predicted_bound_against_the_actual_error(studies):
     result = studies[1]["placement"]
     for row in result.rows:
@@ -115,6 +121,7 @@ def test_placement_checks_the_predicted_bound_against_the_actual_error(studies):
     assert result.summary["within_bound_fraction"] == pytest.approx(np.mean(known))
 
 
+@pytest.mark.slow
 def test_point_count_uses_the_sizes_and_fewer_points_cost_accuracy(studies):
     result = studies[1]["point-count"]
     by_size = {s["points_per_region"]: s for s in result.tables["by_size"]}
@@ -130,6 +137,7 @@ def test_point_count_uses_the_sizes_and_fewer_points_cost_accuracy(studies):
     assert all(r["within_bound"] for r in result.rows if r["status"] == "ok")
 
 
+@pytest.mark.slow
 def test_object_size_compares_figurine_and_car(studies):
     result = studies[1]["object-size"]
     by_object = {o["workpiece"]: o for o in result.tables["by_object"]}
@@ -148,6 +156,7 @@ def _timeless(result) -> list:
     return [{k: v for k, v in row.items() if k != "time_s"} for row in result.to_dict()["rows"]]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["placement", "point-count"])
 def test_a_study_gives_the_same_rows_in_a_process_pool(studies, name):
     pooled = run_study(name, settings=QUICK, runner=Runner(workers=2))
@@ -156,6 +165,7 @@ def test_a_study_gives_the_same_rows_in_a_process_pool(studies, name):
     assert pooled.targets == serial.targets
 
 
+@pytest.mark.slow
 def test_a_study_gives_the_same_rows_on_a_dask_cluster(studies):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
@@ -165,6 +175,7 @@ def test_a_study_gives_the_same_rows_on_a_dask_cluster(studies):
     assert _timeless(on_dask) == _timeless(studies[1]["placement"])
 
 
+@pytest.mark.slow
 def test_an_unreachable_scheduler_is_a_clear_error(tmp_path, capsys):
     pytest.importorskip("distributed")
     assert main(["study", "placement", "--out", str(tmp_path), "--quick", "--scheduler", "tcp://127.0.0.1:9"]) == 2
@@ -182,6 +193,7 @@ def test_bad_study_settings_are_refused(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_cli_study_writes_files_and_reports_targets(tmp_path, capsys):
     code = main(["study", "repeatability", "--out", str(tmp_path), "--quick", "--n", "1", "--report", "--quiet"])
     printed = capsys.readouterr().out
@@ -194,6 +206,7 @@ def test_cli_study_writes_files_and_reports_targets(tmp_path, capsys):
     assert ("every target met" if code == 0 else "targets missed") in printed
 
 
+@pytest.mark.slow
 def test_cli_exit_code_1_when_a_target_is_missed(tmp_path, capsys):
     # A tolerance so small that no calibration passes its gates: the study runs, the target
     # "every run accepted" is missed, and the command says so with exit status 1.

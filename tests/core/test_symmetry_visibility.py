@@ -24,6 +24,7 @@ def _axis_in_x(axis):
     return frames.apply_vectors(X, np.asarray([axis], float))[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, mesh, orders, axes", [
     ("box", shapes.box((80.0, 50.0, 30.0), edge_mm=2.0), [2, 2, 2], [(1, 0, 0), (0, 1, 0), (0, 0, 1)]),
     ("boss plate", shapes.boss_plate(), [4], [(0, 0, 1)]),
@@ -51,6 +52,7 @@ def test_symmetries_found_when_the_model_is_prepared(name, mesh, orders, axes):
     assert len(surface.symmetries()) >= (1 if orders else 0)
 
 
+@pytest.mark.slow
 def test_near_symmetric_plate_has_no_symmetry_but_its_turns_are_tried():
     """The notched plate turned over or about its normal covers nearly the same outline: no symmetry
     (the notch moves), but those turns, refined into its best self-maps, are the first flips every
@@ -73,6 +75,7 @@ def test_near_symmetric_plate_has_no_symmetry_but_its_turns_are_tried():
     assert SurfaceModel(shapes.boss_plate()).maps_onto_itself(quarter)
 
 
+@pytest.mark.slow
 def test_symmetries_are_named_in_words():
     sentences = SurfaceModel(shapes.boss_plate()).symmetries()
     assert len(sentences) == 1

@@ -16,6 +16,8 @@ from workcal_wb.core.simulate.upright_l import GAP_MM, UprightLSpec, upright_l_b
 from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.surroundings import judged_in_surroundings
 
+pytestmark = pytest.mark.slow  # every test here calibrates or matches a whole scene
+
 CASE = Path(__file__).parent.parent / "data" / "verdict-cases" / "upright-l-block-beside-bunny.npz"
 
 

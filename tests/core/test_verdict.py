@@ -65,6 +65,7 @@ def near_square_plate():
     return mesh, SurfaceModel(mesh)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, noise", [(0, 0.1), (3, 0.2), (5, 0.3), (11, 0.1)])
 def test_near_symmetric_plate_turned_over_is_never_ok(near_square_plate, seed, noise):
     """Seen from one side, the plate turned over (or turned 168 or 90 degrees) leaves part of the
@@ -83,6 +84,7 @@ def test_near_symmetric_plate_turned_over_is_never_ok(near_square_plate, seed, n
         assert right or result.reasons, name
 
 
+@pytest.mark.slow
 def test_near_symmetric_plate_seen_well_comes_back_ok_and_right(near_square_plate):
     """The test is not passed by refusing everything: views that show the notch are "ok", right."""
     mesh, surface = near_square_plate
@@ -95,6 +97,7 @@ def test_near_symmetric_plate_seen_well_comes_back_ok_and_right(near_square_plat
     assert ("ok", False) not in verdicts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 6])
 def test_four_fold_part_is_ambiguous_naming_the_symmetry(seed):
     """A square plate with a square boss: any quarter turn about its normal gives the same surface.
@@ -118,6 +121,7 @@ def test_four_fold_part_is_ambiguous_naming_the_symmetry(seed):
         assert not surface.maps_onto_itself(candidate.to_model @ frames.invert(best))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workpiece, seed", [("car", 2), ("plate", 7)])
 def test_noise_above_the_tolerance_is_said_in_one_sentence(workpiece, seed):
     """1.5 mm of sensor noise and a 0.3 mm tolerance: the verdict cannot check the fit to 0.3 mm and
@@ -155,6 +159,7 @@ def verdict_views():
             for c in simulated_cases(0, wanted=wanted)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["notched plate #4", "curved tile #4", "rebated plate #1"])
 def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name, monkeypatch):
     """The half turn puts all but a few tens of the scan's points on the part, and the view's cells
@@ -183,6 +188,7 @@ def test_right_pose_beats_its_flip_refined_like_it(verdict_views, name, monkeypa
     assert flips and all(c.far_off_standard_errors >= 3 and not c.rival for c in flips)
 
 
+@pytest.mark.slow
 def test_flip_chosen_over_the_right_pose_is_never_ok(verdict_views):
     """The search's best is the flipped plate and the right pose is the rival: the rival leaves no
     point far off that the flip explains, so the flip cannot be "ok"."""
@@ -236,6 +242,7 @@ def test_a_right_pose_is_not_pulled_home_by_residuals_of_other_points(near_squar
     assert _slid_home(state, points[:3000], surface, 0.1, polish=lambda home: home, hopeless=np.inf) is state
 
 
+@pytest.mark.slow
 def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
     """Notched plate #4 with the points the flip leaves off the part cut from the scan: every
     remaining point lies on the part in both poses, so nothing in the scan tells them apart."""
@@ -290,6 +297,7 @@ def test_far_off_distances_ask_no_exact_query_for_a_pose_far_from_the_mesh():
     assert sum(asked) == 0, f"{sum(asked)} exact queries for points hundreds of mm off the mesh"
 
 
+@pytest.mark.slow
 def test_a_scale_error_does_not_make_a_wrong_pose_ok():
     """A notched plate seen whole but sparsely (439 points), the scan 1 % too large about its centre (an
     uncalibrated sensor): without the scale error the verdict is "ambiguous" (the plate turned half a
@@ -322,6 +330,7 @@ def _plate_rows(x_end: float = 60.0, row_gap: float = 4.0, step: float = 0.7) ->
     return np.vstack([top[~notch], side])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 6])
 def test_a_face_running_on_past_the_placed_model_is_never_ok(seed):
     """An exact scan of the notched plate in sparse rows: in the scanner's frame (seed 0) and in
@@ -338,6 +347,7 @@ def test_a_face_running_on_past_the_placed_model_is_never_ok(seed):
     assert result.status != "ok" or right(surface, result.matrix, motion), result.reasons
 
 
+@pytest.mark.slow
 def test_a_part_longer_than_its_model_is_not_ok():
     """The plate scanned 30 mm longer than its model (another part, or a model of the wrong revision):
     wherever the model is laid, the scanned faces run on past its end."""
@@ -350,6 +360,7 @@ def test_a_part_longer_than_its_model_is_not_ok():
     assert {FACE_CONTINUED, OUTLINE_CONTINUED} & set(codes(result.reasons)), result.reasons
 
 
+@pytest.mark.slow
 def test_rows_of_the_right_plate_leave_no_face_running_on():
     """The same sparse rows of the plate itself, with noise, in a frame of their own: the right pose is
     found "ok": nothing runs on past its faces (the test that catches a face laid on a shorter one does
@@ -381,6 +392,7 @@ def test_a_low_noise_scan_of_the_right_pose_runs_on_past_no_face(seed):
     assert FACE_CONTINUED not in codes(result.reasons), result.reasons
 
 
+@pytest.mark.slow
 def test_a_point_model_is_not_weighed_by_faces_it_does_not_have():
     """An L-block given as points with normals (no faces, so no bound on the gaps its samples leave):
     half the scan points of its right pose lie farther than a spacing from every sample, and were
@@ -408,6 +420,7 @@ def test_flat_samples_are_those_inside_a_flat_face():
     assert plate.flat(middle, 2.0).all() and not plate.flat(edge, 2.0).any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, model, motion_seed, seed", [
     ("l-block", shapes.l_block, None, 0), ("l-block", shapes.l_block, 103, 1), ("plate", shapes.plate, None, 0)])
 def test_a_part_on_a_table_is_not_ok_upside_down(name, model, motion_seed, seed):
@@ -460,6 +473,7 @@ def _standing(mesh: Cloud) -> Cloud:
                  name=mesh.name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_an_l_block_on_a_slab_is_never_ok_upside_down(seed):
     """An L-block on a slab 60 mm wider, seen from 45 deg above (0.1 mm noise): seed 1 on Debian 12
@@ -478,6 +492,7 @@ def _tilted_shell() -> Cloud:
     return Cloud(shell.points @ frames.rot_y(35.0)[:3, :3].T, triangles=shell.triangles, name="tilted shell")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case, model", [
     ("shell-on-slab-25deg", shapes.shell),
     ("shell-on-slab-20deg", shapes.shell),
@@ -523,6 +538,7 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
         assert result.status != "ok" or right(surface, result.matrix, data["truth"]), (seed, result.reasons)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case, model, motion_seed", [
     ("thin-shell-alone-54deg", lambda: shapes.shell(thickness=2.0, bend_radius=90.0), 201),
     ("long-shell-alone-50deg", lambda: shapes.shell(length=200.0, width=60.0, bend_radius=150.0), 202)])
@@ -542,6 +558,7 @@ def test_a_shell_moved_to_another_frame_is_not_ok_on_its_other_face(case, model,
     assert result.status != "ok" or right(surface, result.matrix, motion @ data["truth"]), result.reasons
 
 
+@pytest.mark.slow
 def test_two_copies_of_the_part_in_the_scan_give_a_verdict():
     """Two chamfered pegs in one scan, the second half a turn round and 300 mm away: the viewpoint the
     verdict estimates from the matched copy put the other nearly in the sensor's plane, and framing the
@@ -592,6 +609,7 @@ def test_depth_through_the_support_is_measured_from_the_side_the_part_stands_on(
     assert _depth_through_support(support, surface, frames.invert(lowered)) == pytest.approx(at_truth + 2.0, abs=0.1)
 
 
+@pytest.mark.slow
 def test_the_grid_clears_points_of_running_on_before_the_samples_tree_weighs_the_rest():
     """Judge.continued_faces asks the cell grid first which scan points may lie off the model (a cell's
     sample is never nearer a point than its nearest sample), and the samples' KD-tree only for those: a
@@ -633,6 +651,7 @@ def test_a_coarse_cad_mesh_is_not_given_a_coarser_grid_to_clear_points_through()
     assert not surface._grids
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, margin, frame", [(0, 10.0, "sensor"), (1, 15.0, "sensor"), (2, 10.0, "arbitrary")])
 def test_the_platform_a_block_stands_on_is_no_surface_running_on_past_it(seed, margin, frame):
     """The block with the platform around its foot (a box drawn loosely, or a platform left in a region):

@@ -61,6 +61,7 @@ def names(doc):
     return sorted(o.Name for o in doc.Objects)
 
 
+@pytest.mark.slow
 def test_calibration_object_matches_truth_and_survives_reopen(simulated, document, tmp_path):
     scene, scan = simulated
     doc, objs = document
@@ -122,6 +123,7 @@ def test_calibration_object_matches_truth_and_survives_reopen(simulated, documen
         FreeCAD.closeDocument(doc.Name)
 
 
+@pytest.mark.slow
 def test_recomputes_when_the_scan_changes(simulated, document):
     scene, scan = simulated
     doc, objs = document
@@ -143,6 +145,7 @@ def test_recomputes_when_the_scan_changes(simulated, document):
     assert lookups.result_of(cal).tolerance_mm == pytest.approx(0.5)
 
 
+@pytest.mark.slow
 def test_picked_regions_are_used(simulated, document):
     scene, scan = simulated
     doc, objs = document
@@ -157,6 +160,7 @@ def test_picked_regions_are_used(simulated, document):
     assert_pose(matrix(cal.W), scene.W)
 
 
+@pytest.mark.slow
 def test_the_points_off_the_models_of_a_loose_region_come_from_the_document(tmp_path):
     """A reference region picked around the block and a band of the platform beside it: the calibration
     object's result says how many of its points lie off the block's model and where (fc.regions.off_model),
@@ -210,6 +214,7 @@ def test_bad_inputs_leave_the_document_unchanged(simulated, document):
     assert names(doc) == before
 
 
+@pytest.mark.slow
 def test_failed_calibration_is_kept_with_its_reasons(simulated, document):
     """A tolerance below the scanner noise: the RMS gates fail, the object is still added."""
     from workcal_wb.fc.scan import set_regions
@@ -230,6 +235,7 @@ def placed_models(doc):
     return placed_model.objects_of(doc, placed_model.TYPE)
 
 
+@pytest.mark.slow
 def test_placed_model_follows_w(simulated, document):
     scene, _ = simulated
     doc, objs = document
@@ -252,6 +258,7 @@ def test_placed_model_follows_w(simulated, document):
     np.testing.assert_allclose(matrix(placed.Placement), W, atol=0.05)
 
 
+@pytest.mark.slow
 def test_undo_redo_of_a_calibration_with_its_placed_model(simulated, document):
     """FreeCAD 1.0 leaves a nameless ghost when the creation of an App::Link is undone, duplicates it
     on redo and crashes when the document closes (FreeCAD issues 17900, 18326): undo and redo must
@@ -272,6 +279,7 @@ def test_undo_redo_of_a_calibration_with_its_placed_model(simulated, document):
     FreeCAD.closeDocument(doc.Name)  # used to crash FreeCAD 1.0
 
 
+@pytest.mark.slow
 def test_models_on_the_scan_sit_on_its_points(simulated, document):
     """The result step's overlay: the workpiece model placed by U and the reference model by V land on the
     scan points they were matched to (to the scan's noise), so a wrong match shows at a glance."""
@@ -292,6 +300,7 @@ def test_models_on_the_scan_sit_on_its_points(simulated, document):
     assert placed_model.tie_breaker(cal, "workpiece") == "" or "differ" in placed_model.tie_breaker(cal, "workpiece")
 
 
+@pytest.mark.slow
 def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
     from workcal_wb.core.deviation import BEYOND_ADDED, WITHIN
     from workcal_wb.fc import deviation_map
@@ -339,6 +348,7 @@ def test_deviation_map_shows_the_clay_lump(simulated, document, tmp_path):
         FreeCAD.closeDocument(doc.Name)
 
 
+@pytest.mark.slow
 def test_deviation_map_refuses_a_calibration_without_u(document):
     from workcal_wb.core.result import CalibrationResult
     from workcal_wb.fc import deviation_map
@@ -352,6 +362,7 @@ def test_deviation_map_refuses_a_calibration_without_u(document):
     assert names(doc) == before
 
 
+@pytest.mark.slow
 def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     from workcal_wb.core.simulate.toolpath_sample import sample_toolpath
     from workcal_wb.core.toolpath import format_gcode
@@ -378,6 +389,7 @@ def test_uncertainty_at_a_gcode_toolpath(simulated, document, tmp_path):
     assert calls == []
 
 
+@pytest.mark.slow
 def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     """Where the scanner stood and which way is up, in the scan's coordinates: inputs of the document
     (the GUI's advanced options), stored on the object and used when it recomputes."""
@@ -401,6 +413,7 @@ def test_scanner_origin_and_up_are_document_inputs(simulated, document):
     assert_pose(matrix(obj.W), scene.W)
 
 
+@pytest.mark.slow
 def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, monkeypatch):
     """The models are prepared once: a second calibration in the session reuses the very same prepared
     objects and reads no cache file; they are also kept in the folder the preferences name (the user's
@@ -481,6 +494,7 @@ def test_prepared_models_are_kept_where_the_preference_says(document, tmp_path, 
         KEPT.clear()
 
 
+@pytest.mark.slow
 def test_prepared_models_live_as_long_as_their_objects(document, tmp_path, monkeypatch):
     """A model kept in memory is released when its object changes (a new one is prepared), is
     deleted, or its document is closed; a label change keeps it."""

@@ -24,6 +24,7 @@ def _as_step(scene, step_file):
     solid.exportStep(str(step_file))
 
 
+@pytest.mark.slow
 def test_calibrate_with_a_step_reference(tmp_path):
     scene = tmp_path / "scene"
     simulated, _ = write_simulation(scene, "car", seed=11, pitch=0.6)

@@ -59,6 +59,7 @@ def names(doc):
     return sorted(o.Name for o in doc.Objects)
 
 
+@pytest.mark.slow
 def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
     with pytest.raises(InputError, match="nothing.nc"):
         setup.choose_toolpath(doc, str(tmp_path / "nothing.nc"))
@@ -101,6 +102,7 @@ def test_the_toolpath_is_chosen_once_and_used_everywhere(doc, scene, tmp_path):
     assert 35 < refused.value.median_mm < 45 and not (tmp_path / "other_calibrated.nc").exists()
 
 
+@pytest.mark.slow
 def test_a_calibration_that_is_not_ok_refuses_the_calibrated_toolpath(doc, scene):
     setup.choose_toolpath(doc, scene["gcode"])
     cal = co.make_calibration(doc, seed=SEED, resamples=1)
@@ -118,6 +120,7 @@ def test_a_calibration_that_is_not_ok_refuses_the_calibrated_toolpath(doc, scene
         co.accept(cal)
 
 
+@pytest.mark.slow
 def test_accepting_is_one_undo_step_and_a_new_result_clears_it(doc):
     cal = co.make_calibration(doc, seed=SEED, resamples=1)
     co.accept(cal)
@@ -143,6 +146,7 @@ def test_picked_regions_recorded_as_ranges_replay_exactly(doc, scene):
     assert regions.clear_regions(scan) and not regions.clear_regions(scan)
 
 
+@pytest.mark.slow
 def test_the_report_uses_the_deviation_map_scale(doc, tmp_path):
     from workcal_wb.fc.deviation_map import make_deviation_map
 
@@ -158,6 +162,7 @@ def test_the_report_uses_the_deviation_map_scale(doc, tmp_path):
                                                  "limit_mm": pytest.approx(2.0)}
 
 
+@pytest.mark.slow
 def test_one_identity_scheme_and_older_files_lose_their_role_property(doc, tmp_path):
     cal = co.make_calibration(doc, seed=SEED, resamples=1, overlays=True)
     kinds = {proxies.type_of(o) for o in doc.Objects} - {None}

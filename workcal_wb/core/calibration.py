@@ -86,17 +86,9 @@ SURFACE_SAMPLES = 2000
 # The match that located a region is its final one when the region holds at most this share of
 # points more than it was made on (see _refit).
 KEPT_MATCH_EXTRA = 0.02
-# Points per region the distortion check measures on: DISTORTION_POINTS where its match's residual RMS
-# is DISTORTION_RMS_MM or less, more as the square of a larger RMS, at most as many as a match is
-# finished on.  The smallest strain its significance test tells from noise goes as RMS / (lever x
-# sqrt(points)): at 0.1 mm on 5000 points, over a region's 30-50 mm, 0.01-0.02 % (four standard
-# deviations), which moves W 0.03-0.06 mm over the 300 mm between the objects; from 0.2 mm of RMS on,
-# the check has every point it had before (up to 20000).  Its exact-face queries cost in proportion: the
-# demo's check took 0.17 s on 20000 points a region, 0.06 s by this rule.  Measured: 8 draws on distorted
-# cell scans at 0.1 mm of noise read within 0.002-0.005 % and 0.006-0.016 mm of every point's reading;
-# 0 of 160 draws on 40 clean ones at 0.1-0.15 mm read a strain; the 172 random cell scenes of stops
-# 35-36 all keep their status.  (A flat 5000 at any RMS read a strain in 2 of 8 draws on a clean scene at
-# 0.35 mm, where every point reads none.)
+# Points per region the distortion check measures on: DISTORTION_POINTS where its match's residual RMS is
+# DISTORTION_RMS_MM or less, more as the square of a larger RMS (the smallest strain it tells from noise goes
+# as RMS / (lever x sqrt(points))), at most as many as a match is finished on (its queries cost per point).
 DISTORTION_POINTS = 5000
 DISTORTION_RMS_MM = 0.1
 # The share of a region its model explains, in percent, is given to hundredths (a gate's value is read).
@@ -115,7 +107,7 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
     trusted comes back with status "failed" or "ambiguous" and the reasons.
     """
     # The whole of it on options.blas_threads, not only the matches: the bootstrap refits' small
-    # products on OpenBLAS's own threads took about ten times as long on a busy machine (their threads spin).
+    # products are slow on OpenBLAS's own threads on a busy machine (their threads spin).
     with pointops.blas_threads(options.blas_threads):
         return _calibrate(scans, workpiece, reference, regions, toolpath_points, options, progress)
 

@@ -9,21 +9,16 @@ a rigid motion, harmless), fitted with one small rigid motion per region by poin
 (Tukey-weighted), on the points near their models (every point a match was finished on among them),
 linearised at the final poses and again where each step leaves the points (ITERATIONS).  What each
 region's rigid motion takes up of that strain, differenced between the two regions at the toolpath, is
-how far W moves.  On cell scans scaled 0.05-2 %, stretched in depth or sheared 0.3-1 %
-(tests/core/test_cell_scenes.py) the strain reads to 2-5 % of itself and the shift is 70-132 % of how
-far W truly moved (short of it at 0.5-1 % scale: 70-83 %, what the matches take up being linearised
-too); on undistorted scans with veils, multipath, range noise and missing patches it stays under 0.05 mm
-at 0.1 mm of noise.  Noise must not read as strain: near a block's edges it reads one-sided whichever
+how far W moves.  Noise must not read as strain: near a block's edges it reads one-sided whichever
 plane a point is measured against, so on meshes those points are left out (EDGE_DEG); and each point's
 lever is its foot on its face, not the point, whose noise moves lever and residual together
-(_linearised).  Seen low (25 deg) through 0.2-0.35 mm of noise, undistorted scenes at their true poses
-read no strain in 18 of 18 (4 did).
+(_linearised).  What the check reads on distorted and on clean scenes: docs/tuning.md.
 
 Whose strain is it?  The reference is the cell's standard (rigid, its model exact): along the strains
 it shows, its points tell the scanner's.  Along the others (two faces of a block seen do not show its
 scale) only the workpiece can tell, and its strain may be the scanner's or its own: a workpiece differs
-from its model often enough (clay, a casting; a real range scan of the bunny against the model zippered
-from several: 0.3-0.5 %), and that does not move W.  So the workpiece's strain there counts only where
+from its model often enough (clay, a casting; a real range scan against a model zippered from several),
+and that does not move W.  So the workpiece's strain there counts only where
 both objects agree that the scan is strained: the reference reads a strain along what it shows and the
 workpiece reads the same there (within OWN_STRAIN).  Otherwise it is taken as the part's own, and the
 calibration warns with the reading and how far it would move W were it the scanner's
@@ -32,9 +27,8 @@ calibration warns with the reading and how far it would move W were it the scann
 The scale and the strains that keep the volume count only along the directions the points show them
 in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
 shears nearly rigid on both, and along those the fit would read a percent of strain out of the models'
-and the sensor's micrometres (it did on a 15 mm figurine: 1-4 %, W "moved" 1-2 mm, truly 0.02 mm).  A
-strain no point shows is not found: the check is blind to it, as every fit is.  Nor is a strain
-within the noise of its own fit (SIGNIFICANCE): 250 points a region read as 0.1 % from noise alone.
+and the sensor's micrometres.  A strain no point shows is not found: the check is blind to it, as every
+fit is.  Nor is a strain within the noise of its own fit (SIGNIFICANCE).
 
 Only the calibration can see a distortion: a lone match has no second region for it to move against,
 its pose is the best rigid fit of a scan of another size.
@@ -59,42 +53,29 @@ STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
                          [0, 0, 0, 0, 1 / _R2, 0],
                          [0, 0, 0, 0, 0, 1 / _R2]]).T
 # A direction of strain counts when a unit strain along it, after the best rigid motion of each region,
-# moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.  Measured: the
-# car scenes' directions 3-25 mm (most over 5), the figurine scene's weakest four 0.5-3 mm.
+# moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.
 SHOWN_MM = 5.0
 # A scale's information below this share of a shown direction's is rounding: none to free (_strain).
 SCALE_ROUNDING = 1e-9
-# Tukey's biweight: a point weighs nothing beyond this many robust scales (robust.MAD_TO_SIGMA x the median
-# absolute residual) of its region.  Mixed pixels and multipath along a silhouette lie off the surface on one
-# side: weighed fully they read as the scan growing (0.05-0.1 % on scans with veils and noise 0.2 mm).
+# Tukey's biweight: a point weighs nothing beyond this many robust scales of its region, since mixed pixels
+# and multipath along a silhouette lie off the surface on one side and, weighed fully, read as the scan growing.
 TUKEY_SCALES = 4.685
 REWEIGHTS = 3
-# A strain counts when the squares it explains are beyond this quantile of what noise explains (chi-square).
-# Measured: 2 of 400 draws of noise (0.35 mm, four views at 25 deg) read one, where the chi-square says 0.1-0.3 %.
+# A strain counts when the squares it explains are beyond this quantile of what noise explains (chi-square):
+# noise alone must not read as a strain.
 SIGNIFICANCE = 0.999
 # A workpiece whose strain along the reference's differs from what the reference reads by more than this
-# (unit-size strain) differs from its model.  Measured: a scanner's 0.2-0.3 % scale read alike to 0.05 %
-# on the two objects (a shear less alike, to 0.18 %: then the reference alone decides, and refused each
-# such scan rightly); the bunny's range scans against their model 0.08-0.36 %.
+# (unit-size strain) differs from its model: a scanner's strain reads alike on both objects.
 OWN_STRAIN = 5e-4
-# A part differs from its model by a few tenths of a percent over the whole (the bunny's range scans: 0.3-0.5 %
-# of unit-size strain), not by this: a workpiece reading more (a scale of 0.87 %) is taken as the scanner.
-# Measured: a 2 % scale left the reference's ends beyond the gates and its middle read no strain, and the
-# workpiece's 2 % was taken as its own (W 3.9 mm off, the check silent).
+# A part differs from its model by a few tenths of a percent over the whole (unit-size strain), not by this:
+# a workpiece reading more is taken as the scanner, or a large scale would pass as the part's own.
 OWN_LIMIT = 0.015
-# The fit is linearised where the points lie: at most this many times, each where the strain found so far
-# leaves them, until a step is below SETTLED (unit-size strain: 3 um over 300 mm).  Linearised once, a
-# strain of a percent read short and leaked into others (a 1 % depth stretch read as a 0.44 % scale, a 2 %
-# scale as 1.39 %) and the workpiece, reading more than the reference, was taken for its own.
+# The fit is linearised where the points lie, at most this many times, each where the strain found so far
+# leaves them, until a step is below SETTLED (unit-size strain: 3 um over 300 mm): once reads a large strain short.
 ITERATIONS = 4
 SETTLED = 1e-5
-# On a mesh, a point counts only where the faces nearest a gate inside and outside its foot (along its
-# face's normal) turn less than this from its face, or from its face's back (a wall thinner than two gates,
-# not an edge): near a block's edge a point pushed inside by noise is nearer the side face, so its noise
-# reads short on one side only.  Measured on two L-block views at 25 deg, 40 draws of 0.35 mm of range noise
-# each, the significance test off: a mean scale of -0.009 and -0.015 % against the nearest samples' tangent
-# planes (another face's near an edge), +0.009 and +0.005 % against the exact closest faces, +0.000 and
-# -0.004 % (+/-0.003) with the edges left out.
+# On a mesh, a point counts only where the faces nearest a gate inside and outside its foot turn less than this
+# from its face or its back (a thin wall): near an edge, noise pushes points nearer the side face, reading short.
 EDGE_DEG = 30.0
 # A region with fewer points near its model than this shows no strain.
 MIN_POINTS = 50

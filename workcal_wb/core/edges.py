@@ -23,7 +23,6 @@ from .surface import SurfaceModel
 WEAK_RATIO = 0.01
 # The same ratio with the sampled surface's normals, below which a fit is checked at all: samples
 # near an edge lend the side faces' normals to points of the top one, which props the ratio up.
-# (Measured: an L-block seen on two faces 0.002-0.01, freeform parts and real bunny scans 0.02-0.1.)
 CHECK_RATIO = 2 * WEAK_RATIO
 # A point is off the model when farther than this many residual sigmas, and never closer than this
 # fraction of the tolerance (a noise-free scan would otherwise count every tilt of a face) ...

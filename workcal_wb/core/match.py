@@ -128,41 +128,33 @@ RIVAL_FLOOR, TURN_POINTS, TURN_GATE = 0.6, 1000, 0.25
 # is many standard errors behind by the view).
 TURNS_APART, QUICK_TURN_POINTS, TURN_FLOOR, TURN_SIGMAS = (10.0, 0.1), 300, 0.85, 3.0
 # A placed model must explain the scan to within its own noise: the robust residual scale may be
-# at most this many times the scan's noise (from local quadric fits) plus the tolerance.  Right
-# matches measured 1-2x (real bunny scans, simulated scans); a scan of another object 10-40x.
+# at most this many times the scan's noise (from local quadric fits) plus the tolerance.
 MAX_NOISE_RATIO = 3.0
 # A match is "ok" only when at least this share (%) of its matched points lies within the tolerance,
 # as a calibration's workpiece region must (the reference must have more: regions).
 MIN_WITHIN_TOLERANCE_PCT = 50.0
 # Points that scatter about local quadric fits by more than this fraction of the fit's radius
-# are a volume, not a surface (surface scans measured below 0.1, noisy sparse ones included;
-# a random blob 0.34).
+# are a volume, not a surface (surface scans, noisy sparse ones included, scatter far less).
 MAX_SCATTER = 0.3
 # The view evidence: a scan point counts fully on the model surface and nothing at EVIDENCE_SIGMAS
 # times the residual scale (the larger of the best pose's and the scan's and model's own noise).
 EVIDENCE_SIGMAS = 3.0
-# The far-off test (see far_off_test): a scan point counts against a pose from EVIDENCE_SIGMAS
-# residual scales off its surface, fully from FAR_OFF_SIGMAS (further off is no further evidence: an
-# outlier is an outlier).
+# The far-off test (far_off_test): a scan point counts against a pose from EVIDENCE_SIGMAS residual scales
+# off its surface, fully from this many (further off is no further evidence: an outlier is an outlier).
 FAR_OFF_SIGMAS = 10.0
 # Up to this many points differing between two poses, the far-off test's chance is exact (all 2^n
 # sign patterns, their weights on a grid of 1/SIGN_FLIP_STEPS: sign_flip_z); beyond, its normal approximation.
 EXACT_SIGN_FLIPS, SIGN_FLIP_STEPS = 64, 256
-# ... and it only rules out a turn of the best when the best's residual scale is at most this many
-# times the noise (right poses measured 1-2x; a pose slid along a curved part, held there by a few
-# points, 4x).
+# The far-off test rules out a turn of the best only when the best's residual scale is at most this many
+# times the noise: right poses fit within it, a pose slid along a curved part (held by a few points) does not.
 FAR_OFF_FIT = 2.0
-# A pose fitting worse than FAR_OFF_FIT noises may rest in a local minimum a slide from home (a curved
-# tile turned 2.4 degrees along its curve: 4 noises, and 1 once home, which lay 3.4 mm RMS away): it
-# is refined again from these shifts (mm RMS over its matched points) either way along each motion
-# of its fit, and the best of those replaces it when its residual scale is at most HOME_GAIN times its own.
+# A pose fitting worse than FAR_OFF_FIT noises may rest in a local minimum a slide from home (a curved tile
+# turned along its curve): it is refined again from these shifts (mm RMS over its matched points) either way
+# along each motion of its fit, and the best of those replaces it when its residual scale is at most HOME_GAIN
+# times its own.
 HOME_SHIFTS_MM, HOME_GAIN = (2.0, 3.0), 0.5
-# A pose whose residual scale is more than this many times the verdict's limit (MAX_NOISE_RATIO noises
-# plus the tolerance) is no slide and no edge's width from fitting: it is neither slid home nor taken
-# to the exact surface (each costs about a second on a mesh).  Right poses measured under 1x (real and
-# simulated scans; a curved tile slid home from 4 noises, about 1.3x); a wrong model's poses 2.4-3x
-# after the search's refinement and 8-12x once widened.  A hopeless pose is still widened, and its
-# turns refined: that is how a flip handed over by the search (3-4x) comes home.
+# A pose missing the verdict's limit (MAX_NOISE_RATIO noises plus the tolerance) by more than this factor is
+# no slide from fitting: it is neither slid home nor taken to the exact surface (costly on a mesh).
 HOPELESS_FIT = 2.0
 # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
 # samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
@@ -190,9 +182,8 @@ PREPARED_LEVELS = 2
 # A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
 # MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
 MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
-# A placed model may reach this many tolerances through the plane its scan's other points stand on (a
-# table wider than the model, _depth_through_support), no more: measured on right poses to 0.56 mm
-# (a plate's bottom face in the plane, 0.1 mm noise), and 1.15-51 mm on shells slid along their bend.
+# A placed model may reach this many tolerances through the plane its scan's other points stand on (a table
+# wider than the model, _depth_through_support): right poses stay within it, shells slid along their bend do not.
 SUPPORT_TOLERANCES = 3.0
 # A face is flat where its samples' normals agree over CONTINUED_FLAT_SPACINGS model spacings (its edge
 # band is that wide); points beside it lie within CONTINUED_REACH_SPACINGS scan spacings of the mesh
@@ -205,10 +196,8 @@ SUPPORT_TOLERANCES = 3.0
 CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_REACH_SAMPLES, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 12.0, 4.0
 CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS, CONTINUED_SAMPLES = 0.1, 8, 200, 256
 # A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its wall across
-# (SurfaceModel.wall_across) is thinner than THIN_PART of its diagonal (shells and plates measured
-# 0.012-0.07, the car, the bunny and blocks 0.10 and more; the spread of its surface across its thinnest
-# axis, tried first, left out shells bent more than 5 % of their diagonal); the wall behind a scan is
-# then measured where it lies, and is a wall up to THIN_WALL_DIAGONALS.
+# (SurfaceModel.wall_across) is thinner than THIN_PART of its diagonal, below solid bodies' and above shells';
+# the wall behind a scan is then measured where it lies, and is a wall up to THIN_WALL_DIAGONALS.
 THIN_PART, THIN_WALL_DIAGONALS = 0.08, 0.25
 # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
 # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.

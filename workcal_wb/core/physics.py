@@ -32,9 +32,8 @@ SAMPLES, PIXEL_SAMPLE_SPACINGS, PIXEL_SCAN_SPACINGS = 12000, 2.0, 2.0
 ERODE_PIXELS = {"known": 1, "estimated": 3}
 # Scan points this far behind the placed surface (mm, and at least DEPTH_PIXELS pixels) were seen through it.
 DEPTH_MARGIN_MM, DEPTH_PIXELS = 5.0, 2.0
-# A tie is broken by the constraints only when the search listed at most this many rivals: a view the part fits
-# in more ways is one whose list of them is a sample, not all of them: ruling out the listed few may leave
-# standing a pose the search never listed.
+# A tie is broken by the constraints only when the search listed at most this many rivals: a longer list is a
+# sample, and ruling out its few may leave standing a pose the search never listed.
 MAX_RULED_OUT = 2
 # A rival breaks free space when it contradicts at least this many more view pixels than the best,
 # and this share of its own interior more.

@@ -22,8 +22,8 @@ def blas_threads(count: int | None):
     other BLAS.
 
     The matcher's matrix products are small or few: OpenBLAS's threads would only spin after each
-    one and take the cores that open3d's OpenMP threads need for the features (measured on 2 cores:
-    matches 10-25 % faster single-threaded), so headless runs ask for 1 (``MatchOptions.blas_threads``).
+    one and take the cores that open3d's OpenMP threads need for the features, so headless runs ask
+    for 1 (``MatchOptions.blas_threads``).
     OpenBLAS has one setting for the whole process: blocks that overlap (matches in several
     threads) share it; the first one sets it and the last one to leave puts back what was there
     before, so no order of entering and leaving leaves it changed.  This is what threadpoolctl does,

@@ -973,7 +973,7 @@ def _parse_text_cloud(data: bytes, label: str) -> _Parsed:
 
 
 # The longest line a text cloud may have: a point with a hundred scalar fields fits; a whole cloud
-# written on one line (27 million numbers read for 23 s into 1.4 GB) does not.
+# written on one line (slow to read, gigabytes in memory) does not.
 MAX_TEXT_LINE_CHARS = 10_000
 
 

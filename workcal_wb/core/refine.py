@@ -15,7 +15,7 @@ import numpy as np
 from .robust import MAD_TO_SIGMA, gauss_newton_step, geman_mcclure
 from .surface import SurfaceModel
 
-# Exact point-to-surface steps at most (each one closest-point query: 4-15 ms for 20k points).
+# Exact point-to-surface steps at most (each one closest-point query of every point).
 EXACT_ITERATIONS = 30
 # An offset from the closest surface point that leaves the face normal by more than acos(EDGE_COSINE)
 # (~8 deg) comes from an edge or a corner; below EDGE_MIN_MM its direction is float32 noise.

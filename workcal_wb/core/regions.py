@@ -29,9 +29,8 @@ from .surface import GATE_CELLS, SurfaceModel
 # off it must lie over it, UP_SIDE_SHARE of those over its hull less the margin on one side.
 MIN_PLATFORM_FRACTION = 0.05
 SUPPORTED_SHARE, UP_SIDE_SHARE, ALL_ON_ONE_SIDE = 0.5, 0.8, 0.9
-# A platform's hull has at least this many times the area of the objects' footprint on it (measured: 1.6-1.9
-# for a platform seen only within 40 mm of the objects, 2-7 seen whole, 2.2-3.2 with a bunny hanging over
-# its edge; 0.67 and 0.86 for faces of the objects taken for a platform in scenes without one).
+# A platform's hull has at least this many times the area of the objects' footprint on it: a platform is larger
+# than what stands on it, a face of an object taken for one (in a scene without a platform) is not.
 FOOTPRINT_RATIO = 1.25
 # The largest planes tried in turn (most points first) until one is the platform.
 PLATFORM_CANDIDATES = 5
@@ -53,10 +52,9 @@ MIN_CLUSTER_POINTS = 100
 # clusters near its model, it touches something else and only its near points are kept.
 CLUSTER_SHARE = 0.5
 TOUCHING_SHARE = 0.9
-# A match only locates an object when most matched points lie within the tolerance and most of the
-# candidate is explained: the reference is rigid and unchanged, the workpiece may have had clay added
-# or carved.  A wrong model placed "as well as it goes" scores far lower (measured: 10-30 % within
-# tolerance for an ellipsoid or the L-block on a car; fitness 0.36-0.86 for flipped L-block poses).
+# A match only locates an object when most matched points lie within the tolerance and most of the candidate
+# is explained (a wrong model placed "as well as it goes" scores far lower): the reference is rigid and
+# unchanged, the workpiece may have had clay added or carved.
 MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": MIN_MATCH_WITHIN_TOLERANCE_PCT}
 MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
@@ -69,9 +67,8 @@ GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
 ON_SURFACE_NOISES, MIN_ON_SURFACE_MM = 5.0, 0.5
 # A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
 MIN_FITNESS_OF_CLUSTER = 0.05
-# Where objects touch, the points of their clusters on neither placed model (clay joining them, points
-# at the contact) stay under this share of the reference region's (measured: 2-8 % on right splits,
-# about 50 % where a wrong pose explained one arm of the L-block).
+# Where objects touch, the points of their clusters on neither placed model (clay joining them, points at the
+# contact) stay under this share of the reference region's; a wrong pose leaves far more.
 UNEXPLAINED_SHARE = 0.25
 
 

@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-# min/max eigenvalue ratio below which a motion counts as free (too weakly held to trust).
-# Measured: cylinder 5e-5, sphere 4e-5, plane 0, one flat face of a block laid on a gently curved
-# car panel 3e-3; real partial bunny scans 0.02-0.1, simulated car 0.05, 2 cm figurine 0.017.
+# min/max eigenvalue ratio below which a motion counts as free (too weakly held to trust): above
+# surfaces that leave a motion free (cylinder, sphere, plane), below real partial scans of freeform parts.
 FREE_MOTION_RATIO = 5e-3
 # A free twist whose rotation axis passes within this many RMS radii of the points is described
 # as a rotation (a sphere seen from one side turns about its centre, behind the points).

@@ -38,9 +38,8 @@ BRICK_BITS = 2
 BRICK = 1 << BRICK_BITS
 # Cells filled by one KD-tree query at most (bounds the temporary memory of a fill: ~100 bytes a cell).
 FILL_CHUNK = 1 << 15
-# precompute scans the grid in slabs of about this many cells (a slab's near cells' keys and values
-# live at once: ~60 bytes a cell; 2^18 made the figurine's finest grid peak 28 MB traced, 2^16 22 MB,
-# the same cells filled).
+# precompute scans the grid in slabs of about this many cells: a slab's near cells' keys and values
+# live at once (~60 bytes a cell), so the slab bounds the peak memory.
 NEAR_SLAB_CELLS = 1 << 16
 FLAT_NEIGHBOURS, FLAT_BLOCK = 16, 1 << 12  # SurfaceModel.flat
 # SurfaceModel.wall_across looks through this many view samples, on pixels this many (thinned)
@@ -94,7 +93,7 @@ class NearestGrid:
 
     Cells are kept in bricks of BRICK^3, stored only once one of their cells is filled: the cells a
     match visits lie along the surface, a thin shell of a grid of millions of cells, so a dense
-    array would hold pages of untouched cells (11 MB of a bunny match's 94 MB, measured; a brick of 4^3 cells wastes least of a shell).  A cell is
+    array would hold pages of untouched cells (a brick of 4^3 cells wastes least of a shell).  A cell is
     named by its key: its brick's number times BRICK^3 plus its place in the brick.
     """
 
@@ -430,7 +429,7 @@ class SurfaceModel:
 
     def nearest(self, points: np.ndarray, gate: float):
         """(distance, sample index, found) for each point, searching only within ``gate`` mm."""
-        # Threads pay off only for large queries (measured: 2k points are faster on one).
+        # Threads pay off only for large queries.
         d, idx = self.tree.query(points, distance_upper_bound=gate, workers=-1 if len(points) > 10000 else 1)
         found = np.isfinite(d)
         return d, np.where(found, idx, 0), found

@@ -39,10 +39,8 @@ FLAT_DEG = 3.0
 # A pixel's evidence: +weight for scan points on the visible model surface, HIDDEN for a scan point
 # the placed model would hide, MISSING for an empty footprint pixel where the model faces the sensor.
 HIDDEN, MISSING = -1.0, -1.0
-# A view sees this far off its axis (the tangent of 60 deg, wider than any scanner's field): a point
-# beyond, such as a second object beside the sensor, lies outside it, as one behind the viewpoint does
-# (its pixel coordinates grow without bound as it nears the sensor's plane: a window holding it asked
-# for hundreds of GB).
+# A view sees this far off its axis (the tangent of 60 deg, wider than any scanner's field): a point beyond
+# lies outside it, as one behind the viewpoint does (its pixel coordinates grow without bound near the sensor).
 MAX_OFF_AXIS = np.tan(np.radians(60.0))
 
 

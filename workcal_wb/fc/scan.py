@@ -1,14 +1,12 @@
 """Scan document objects: the full cloud for matching, regions picked on it, and reading scan files.
 
 A WorkCal scan is a ``Points::FeaturePython`` whose ``Points`` hold every point of the scan (FreeCAD
-saves them in the .FCStd as binary data).  The 3D view shows all of them: measured on this project's
-2-core test machine with Mesa software OpenGL under Xvfb, a 1,000,000-point cloud redraws in
-0.1-0.3 s and ``saveImage`` takes 0.13-0.25 s (100,000 points: 0.03 s), which is usable, so no
-decimated display copy is kept.  Any hardware OpenGL is much faster.  FreeCAD stores coordinates as
+saves them in the .FCStd as binary data).  The 3D view shows all of them: even software OpenGL redraws
+a million-point cloud fast enough, so no decimated display copy is kept.  FreeCAD stores coordinates as
 float32 (about 0.1 um at 1.5 m from the origin); ``make_scan`` rounds the cloud to float32 at once so
 a scan gives the same numbers before and after save/reopen.
 
-Converting FreeCAD's point list to numpy costs ~0.6 s per million points, so the scan's proxy keeps
+Converting FreeCAD's point list to numpy is slow for large clouds, so the scan's proxy keeps
 the numpy cloud until ``Points`` or ``Placement`` change.
 
 Regions are index arrays into ``scan_cloud(obj).points``, stored as ``App::PropertyIntegerList``

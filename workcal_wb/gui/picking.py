@@ -80,10 +80,7 @@ def eye_depth(view, points: np.ndarray) -> np.ndarray:
 
 # A point is hidden when a point nearer the camera by more than DEPTH_CELLS cell widths (in mm)
 # projects into its cell; cells are CELL_SPACINGS times the points' spacing on the screen (so a
-# surface of points is closed) and at least MIN_CELL_PX wide.  Measured on the simulated car scene
-# against a dense depth buffer of its true surfaces, seen from four directions: points hidden by more
-# than 20 mm (the platform under the part) are found to 99 % or better, 1-2 % of visible points at
-# silhouettes are taken for hidden.
+# surface of points is closed) and at least MIN_CELL_PX wide.
 CELL_SPACINGS, DEPTH_CELLS, MIN_CELL_PX = 1.5, 5.0, 2.0
 
 

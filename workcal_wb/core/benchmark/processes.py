@@ -54,9 +54,8 @@ class Run:
     cpu_s: float = float("nan")  # user + system time of the process, all its threads
 
 
-# Runs one command and prints its wall time, peak resident memory (kB), exit status and CPU time.  A small
-# process of its own forks it: a child's peak memory counts the memory of whatever forked it (Linux
-# keeps the forking process's high-water mark across exec), so the benchmark's own must not.
+# Runs one command and prints its wall time, peak resident memory (kB), exit status and CPU time, forked from
+# a small process of its own: Linux keeps the forking process's high-water mark in the child's across exec.
 LAUNCHER = """import os, sys, time
 started = time.perf_counter()
 pid = os.fork()

@@ -43,9 +43,8 @@ JOINT_MOVE, LINEAR_MOVE = 0, 1
 # such a step no joint of an arm away from its singularities turns more than a few degrees.
 SAMPLE_STEP_MM = 5.0
 SAMPLE_STEP_DEG = 2.0
-# Most any joint may turn over one full sample step; past a singularity joints 4 and 6 (or 1, or 2
-# and 3) turn up to 180 deg at once.  Shorter steps allow proportionally less: a fine raster passing
-# close to a singularity is as fast for the joints as a coarse one passing through it.
+# Most any joint may turn over one full sample step (past a singularity joints turn up to 180 deg at once);
+# shorter steps allow proportionally less, as a fine raster near a singularity is as fast for the joints.
 MAX_JOINT_STEP_DEG = 20.0
 # What a step shorter than this share of a sample step is still allowed (so that repeated points and
 # rounding never count as a flip): MAX_JOINT_STEP_DEG times it, 0.2 deg.
@@ -56,9 +55,8 @@ MIN_STEP_SHARE = 0.01
 WRIST_NEAR_DEG = 5.0
 ELBOW_NEAR_DEG = 5.0
 SHOULDER_NEAR_MM = 50.0
-# The arm posture (OPW branch modulo 4) taken where it follows the program: the wrist centre in front of
-# axis 1 and the elbow up, as robots are homed and set up, so the first joint move does not swing the
-# arm over its base or under its elbow.
+# The arm posture (OPW branch modulo 4) taken where it follows the program: wrist centre in front of axis 1,
+# elbow up, as robots are homed, so the first joint move does not swing the arm over its base or under its elbow.
 USUAL_ARM = 0
 # Samples solved and followed at a time: a chunk's joints (3 MB) are unwrapped while still in the caches,
 # and the temporaries stay under glibc's mmap threshold and are reused rather than faulted in afresh.

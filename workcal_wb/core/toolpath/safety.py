@@ -33,9 +33,8 @@ DEFAULT_FANUC_CONFIG = "N U T, 0, 0, 0"
 # The fewest lines a program part may be cut to: its frame (header, declarations, END) takes that many.
 MIN_PART_LINES = 10
 FANUC_CONFIG = re.compile(r"[NF] [UD] [TB], -?[0-9], -?[0-9], -?[0-9]")
-# How far (mm) a toolpath's cutting moves may run from the workpiece model, as their median: a finishing
-# pass runs on the surface and a roughing pass within a cutter's length of it, while a toolpath made for
-# another part (a mirrored model, the wrong file) runs far off.
+# How far (mm) a toolpath's cutting moves may run from the workpiece model, as their median: finishing and
+# roughing passes run within a cutter's length of it, a toolpath made for another part runs far off.
 DEFAULT_PATH_REACH_MM = 25.0
 # Points along the cutting moves whose distances to the model give that median (evenly by length; a
 # median of this many is known to a fraction of a percent of the distances' spread).
