@@ -33,6 +33,7 @@ def test_the_scan_holds_the_part_the_table_and_a_neighbour_with_its_truth():
 
 
 @pytest.mark.slow
+@pytest.mark.slow
 @pytest.mark.parametrize("name, seed", [("L-block", 1), ("curved tile", 2)])
 def test_the_table_beside_a_part_does_not_pull_its_fit(name, seed):
     """The table's points along the part's foot lie within the fit's reach of its side faces and rim:
@@ -44,6 +45,7 @@ def test_the_table_beside_a_part_does_not_pull_its_fit(name, seed):
     assert largest_displacement(mesh, result.matrix, scan.U) < 1.0
 
 
+@pytest.mark.slow
 def test_the_verdicts_table_takes_one_view_of_each_part_and_judges_it_at_its_tolerance():
     from workcal_wb.core.benchmark.verdicts import DEPTH_CAMERA_TOLERANCE_MM, RIGHT_MM, depth_camera_cases, right
 
@@ -58,6 +60,7 @@ def test_the_verdicts_table_takes_one_view_of_each_part_and_judges_it_at_its_tol
     assert not right(surface, slid, case.truth, RIGHT_MM)
 
 
+@pytest.mark.slow
 def test_a_thin_plate_whose_sides_lie_in_the_tables_band_is_never_ok_turned():
     """A 6 mm plate lying on the table: its sides are mostly within the table's noise band; left out with
     the table, only the top face and its outline hold the fit, and a turn of it must not pass as right."""
