@@ -33,7 +33,6 @@ def test_the_scan_holds_the_part_the_table_and_a_neighbour_with_its_truth():
 
 
 @pytest.mark.slow
-@pytest.mark.slow
 @pytest.mark.parametrize("name, seed", [("L-block", 1), ("curved tile", 2)])
 def test_the_table_beside_a_part_does_not_pull_its_fit(name, seed):
     """The table's points along the part's foot lie within the fit's reach of its side faces and rim:
