@@ -33,6 +33,18 @@ def error(text: str) -> None:
     FreeCAD.Console.PrintError(f"WorkCal: {text}\n")
 
 
+def for_people(text: str) -> str:
+    """A message from core worded for the GUI: command-line flags (``(--force)``, ``--model-units m``)
+    taken out or replaced by the GUI's own way, numbers with float noise (70.96000000000001) rounded."""
+    import re
+
+    text = re.sub(r"\s*\((?:the CLI's |use |with |see )?--[a-z][\w-]*(?: [\w.-]+)?(?:;[^)]*)?\)", "", text)
+    text = re.sub(r"(?<![\w-])--force\b", "the Force button", text)
+    text = re.sub(r"(?<![\w-])--[a-z][\w-]*-units\b", "unit", text)
+    text = re.sub(r"(?<![\w-])--[a-z][\w-]*", lambda m: m.group(0)[2:].replace("-", " "), text)
+    return re.sub(r"-?\d+\.\d{5,}", lambda m: f"{float(m.group(0)):.4g}", text)
+
+
 def main_window():
     if not FreeCAD.GuiUp:
         return None

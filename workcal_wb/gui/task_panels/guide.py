@@ -128,11 +128,15 @@ class GuidePanel:
         self.go(step or self.next_step())
 
     @classmethod
-    def open(cls, doc, step: str | None = None):
+    def open(cls, doc=None, step: str | None = None):
         """The guide of ``doc`` at ``step`` (default: the next step to do), the open one switched to it;
         returns the panel.  A step reopens its guide through this (``self.guide.open``) after a panel
-        that took the guide's place closes."""
+        that took the guide's place closes.  Without ``doc`` it does nothing: FreeCAD calls ``open()`` of
+        every task dialog it shows."""
         import FreeCADGui
+
+        if doc is None:
+            return None
 
         current = cls.current
         if current is not None and current.alive() and FreeCADGui.Control.activeDialog():
