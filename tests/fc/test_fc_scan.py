@@ -378,3 +378,21 @@ def test_a_scan_not_read_from_a_file_cannot_change_its_unit(doc):
         scan.change_units(obj, "m")
     with pytest.raises(InputError, match="unknown length unit"):
         scan.change_units(obj, "furlong")
+
+
+def test_the_same_model_for_both_roles_is_refused_naming_both(doc, tmp_path):
+    path = tmp_path / "bracket.step"
+    Part.makeBox(60, 40, 20).exportStep(str(path))
+    first = models.import_model(doc, path)
+    second = models.import_model(doc, path)
+    setup.choose_models(doc, workpiece=first)
+    with pytest.raises(InputError, match=r"'bracket.step001' cannot be the reference model: it is the workpiece "
+                                         r"model 'bracket.step' again \(read from the same file bracket.step\)"):
+        setup.check_setup(doc, reference=second)
+    copy = doc.addObject("Part::Feature", "Copy")
+    copy.Shape = first.Shape.copy()
+    with pytest.raises(InputError, match="the same shape at the same place"):
+        setup.check_setup(doc, reference=copy)
+    other = doc.addObject("Part::Feature", "Cube")
+    other.Shape = Part.makeBox(60, 40, 20, FreeCAD.Vector(300, 0, 0))  # the same size elsewhere: another object
+    assert setup.check_setup(doc, reference=other)["reference"] is other

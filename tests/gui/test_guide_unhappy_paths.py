@@ -114,3 +114,130 @@ def test_a_model_read_in_the_wrong_unit_is_flagged_for_its_role_and_fixed_in_one
     doc.undo()
     pump(0.1)
     assert obj.Units == "mm" and warning.isVisible()
+
+
+@pytest.fixture
+def failed_calibration(doc, tmp_path, monkeypatch):
+    """A calibration in the guide's document that failed: its regions came out empty and a check failed by
+    a share with float noise.  The match itself is replaced by that result (the guide's handling of a
+    failure is under test, not the matcher)."""
+    import Part
+
+    from workcal_wb.core.result import NOT_FOUND, CalibrationResult, Reason
+    from workcal_wb.fc import calibration_object as co
+    from workcal_wb.fc import inputs as fc_inputs
+    from workcal_wb.fc.scan import make_scan
+    from workcal_wb.fc.setup import set_setup
+    from workcal_wb.core.geometry import Cloud
+
+    workpiece = doc.addObject("Part::Feature", "Block")
+    workpiece.Shape = Part.makeBox(60, 40, 20)
+    reference = doc.addObject("Part::Feature", "Cube")
+    reference.Shape = Part.makeBox(30, 30, 30, FreeCAD.Vector(200, 0, 0))
+    points = np.random.default_rng(0).uniform(0, 60, size=(2000, 3)) + [0, 0, 500]
+    set_setup(doc, scan=make_scan(doc, Cloud(points, name="scan"), "Scan"), workpiece=workpiece, reference=reference)
+    doc.recompute()
+    failed = CalibrationResult(
+        status="failed", W=np.eye(4), reasons=[Reason(NOT_FOUND, "workpiece match: the scan shows too little of "
+                                                                 "the workpiece model (use --regions auto)")],
+        quality_gates=[{"name": "workpiece inliers", "value": 70.96000000000001, "limit": 80.0, "passed": False,
+                        "unit": "%"}],
+        regions={"workpiece": np.zeros(0, dtype=np.int64), "reference": np.zeros(0, dtype=np.int64)})
+    monkeypatch.setattr(fc_inputs, "run", lambda inputs, progress=None: failed)
+    calibration = co.make_calibration(doc, regions="Auto", resamples=1)
+    assert calibration.Status == "failed"
+    return calibration
+
+
+def test_a_failed_calibration_is_crossed_out_in_the_step_list_not_ticked(doc, failed_calibration, guide_of, pump,
+                                                                         shoot_window, page_fits):
+    panel = guide_of("result")
+    pump(0.1)
+    states = panel.states()
+    assert states["calibrate"][0] == "failed" and "FAILED" in states["calibrate"][1]
+    assert states["result"][0] == "failed"
+    assert states["regions"][0] == "failed" and "0 points" in states["regions"][1]  # empty regions: no tick
+    for name in ("regions", "calibrate", "result"):
+        mark = panel.rows[name].mark.text()
+        assert "\u2717" in mark and "#c62828" in mark and "\u2713" not in mark, (name, mark)
+    assert "\u2713" in panel.rows["scan"].mark.text() and "\u2713" in panel.rows["models"].mark.text()
+    page_fits(panel.form)
+    shoot_window("failed_calibration_crossed")
+
+
+def test_reasons_in_the_guide_have_round_numbers_and_no_command_line_flags(doc, failed_calibration, guide_of, pump):
+    from workcal_wb.gui.task_panels import common
+
+    panel = guide_of("result")
+    pump(0.1)
+    shown = [panel.steps["result"].reasons.text(), panel.rows["result"].state.text(),
+             panel.rows["calibrate"].state.text()]
+    shown += [panel.steps["result"].checks.item(r, c).text() for r in range(panel.steps["result"].checks.rowCount())
+              for c in range(3)]
+    for text in shown:
+        assert "--" not in text and "70.96000000000001" not in text, text
+    assert "the scan shows too little of the workpiece model" in panel.steps["result"].reasons.text()
+    # The force question: the calibration's reason in it, rounded, without the command line's flag.
+    asked = []
+    monkey = common.confirm_force
+    try:
+        common.confirm_force = lambda reason, reach=False: asked.append(reason) or False
+        panel.steps["toolpath"].use_file(str(write_gcode(doc)))
+        panel.steps["toolpath"].show_in_robot_frame()
+    finally:
+        common.confirm_force = monkey
+    assert asked, "no force question was asked"
+    assert "70.96 %" in asked[0] and "70.96000000000001" not in asked[0] and "--" not in asked[0], asked[0]
+
+
+def write_gcode(doc):
+    import os
+    import tempfile
+
+    path = os.path.join(tempfile.mkdtemp(), "path.nc")
+    with open(path, "w") as stream:
+        stream.write("G21 G90\nG0 X0 Y0 Z10\nG1 Z0 F500\nG1 X20 Y10\nG1 X30 Y0\nG0 Z10\n")
+    return path
+
+
+def test_a_model_loaded_for_both_roles_is_refused_naming_both(doc, tmp_path, guide_of, pump, shoot_window,
+                                                               page_fits):
+    import Part
+
+    step_file = tmp_path / "bracket.step"
+    Part.makeBox(60, 40, 20).exportStep(str(step_file))
+    panel = guide_of("models")
+    page = panel.steps["models"]
+    workpiece = page.load_file("workpiece", str(step_file))
+    assert get_setup(doc)["workpiece"] is workpiece and not page.problem.isVisible()
+    objects_before = [o.Name for o in doc.Objects]
+    # The same file again, as the reference model: refused before it is read, the document unchanged.
+    assert page.load_file("reference", str(step_file)) is None
+    pump(0.1)
+    text = page.problem.text()
+    assert page.problem.isVisible() and "bracket.step" in text and "workpiece model" in text and \
+        "reference model" in text, text
+    assert get_setup(doc)["reference"] is None and [o.Name for o in doc.Objects] == objects_before
+    assert "Traceback" not in text
+    page_fits(panel.form)
+    shoot_window("same_file_for_both_models")
+    # The same shape under another name (a copy of the workpiece) chosen as the reference: refused naming both.
+    copy = doc.addObject("Part::Feature", "BracketCopy")
+    copy.Shape = workpiece.Shape.copy()
+    copy.Label = "Bracket copy"
+    doc.recompute()
+    pump(0.1)
+    choose_in(page.combos["reference"], "Bracket copy")
+    pump(0.1)
+    text = page.problem.text()
+    assert "'Bracket copy'" in text and "'bracket.step'" in text and "same shape" in text, text
+    assert get_setup(doc)["reference"] is None
+    shoot_window("same_shape_for_both_models")
+    # A model of its own for the reference: accepted, the message gone.
+    other = doc.addObject("Part::Feature", "Cube")
+    other.Shape = Part.makeBox(30, 30, 30, FreeCAD.Vector(200, 0, 0))
+    doc.recompute()
+    pump(0.1)
+    choose_in(page.combos["reference"], "Cube")
+    pump(0.1)
+    assert get_setup(doc)["reference"] is other and not page.problem.isVisible()

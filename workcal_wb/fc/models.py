@@ -135,6 +135,7 @@ def import_model_file(doc, path, units: str = "mm", name: str | None = None):
             raise InputError(f"{path}: contains no surfaces")
         obj = doc.addObject("Part::Feature", _object_name(label))
         obj.Shape = shape
+        remember_file(obj, path, "")  # a CAD file carries its own unit
     else:
         cloud = read_cloud(path, units=units)
         obj = add_model(doc, cloud, label)
@@ -200,6 +201,36 @@ def change_units(obj, units: str):
         doc.recompute()
     FreeCAD.Console.PrintMessage(f"WorkCal: {label} read again in {units}\n")
     return obj
+
+
+def same_model(first, second) -> str:
+    """Why ``first`` and ``second`` are the same model loaded twice ("read from the same file X", "the same
+    shape"), or "" when they are not.  Cheap: file names, then counts and bounding boxes, no tessellation."""
+    files = source_file(first), source_file(second)
+    if all(files) and os.path.normcase(os.path.abspath(files[0])) == os.path.normcase(os.path.abspath(files[1])):
+        return f"read from the same file {os.path.basename(files[0])}"
+    (kind, a), (other_kind, b) = kind_of(first), kind_of(second)
+    if kind is None or kind != other_kind:
+        return ""
+    if kind == "shape":
+        size = (len(a.Faces), len(a.Edges), len(a.Vertexes), round(a.Area, 6)), \
+               (len(b.Faces), len(b.Edges), len(b.Vertexes), round(b.Area, 6))
+    elif kind == "mesh":
+        size = (a.CountPoints, a.CountFacets), (b.CountPoints, b.CountFacets)
+    else:
+        size = (a.CountPoints,), (b.CountPoints,)
+    if size[0] != size[1] or not _same_box(a.BoundBox, b.BoundBox):
+        return ""
+    return "the same shape at the same place"
+
+
+# Bounding boxes this close (mm) are the same box: float noise of a copied or re-read shape.
+SAME_BOX_MM = 1e-6
+
+
+def _same_box(a, b) -> bool:
+    return all(abs(getattr(a, k) - getattr(b, k)) <= SAME_BOX_MM
+               for k in ("XMin", "YMin", "ZMin", "XMax", "YMax", "ZMax"))
 
 
 def model_unit_warning(obj) -> tuple[str, str | None]:

@@ -61,7 +61,7 @@ def show_error(title: str, text: str) -> None:
     """The error in the Report view and, interactively, in a message box."""
     error(text)
     if INTERACTIVE and FreeCAD.GuiUp:
-        QtWidgets.QMessageBox.critical(main_window(), title, text)
+        QtWidgets.QMessageBox.critical(main_window(), title, for_people(text))
 
 
 def guarded(title: str):
@@ -204,7 +204,7 @@ def confirm_force(reason: str, reach: bool = False) -> bool:
         box.setText(translate("WorkCal", "The calibration did not pass its quality gates."))
         question = translate("WorkCal", "Use it anyway? The result is marked FORCED; check the workpiece position by "
                                         "hand before running the program.")
-    box.setInformativeText(reason + "\n\n" + question)
+    box.setInformativeText(for_people(reason) + "\n\n" + question)
     box.setStandardButtons(QtWidgets.QMessageBox.Yes | QtWidgets.QMessageBox.No)
     box.setDefaultButton(QtWidgets.QMessageBox.No)
     return run_modal(box) == QtWidgets.QMessageBox.Yes
@@ -221,8 +221,8 @@ def with_force(action, confirm=None):
         return action(force=False)
     except (CalibrationNotOk, ReachRefused) as exc:
         reach = isinstance(exc, ReachRefused)
-        if not (confirm or (lambda reason: confirm_force(reason, reach)))(str(exc)):
-            warning(str(exc))
+        if not (confirm or (lambda reason: confirm_force(reason, reach)))(for_people(str(exc))):
+            warning(for_people(str(exc)))
             return None
     warning(translate("WorkCal", "writing a program the robot cannot follow (FORCED)") if reach else
             translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))

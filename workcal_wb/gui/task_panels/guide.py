@@ -20,12 +20,13 @@ from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
 from workcal_wb.gui.task_panels.common import close_dialog, show_panel
-from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, STEPS, TODO
+from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, FAILED, STEPS, TODO
 from workcal_wb.gui.task_panels.steps.base import reveal
 
 translate = FreeCAD.Qt.translate
 
-MARKS = {DONE: ("\u2713", "#2e7d32"), TODO: ("\u25cb", "#777777"), ATTENTION: ("!", "#d06000")}
+MARKS = {DONE: ("\u2713", "#2e7d32"), TODO: ("\u25cb", "#777777"), ATTENTION: ("!", "#d06000"),
+         FAILED: ("\u2717", "#c62828")}
 NEXT_MARK = ("\u25b6", "#2a62b0")
 NEXT_STYLE = "QFrame#{} {{ background: #dce8f7; border-left: 3px solid #2a62b0; border-radius: 3px; }}"
 SHOWN_STYLE = "QFrame#{} {{ border: 1px solid #9aa4ae; border-radius: 3px; }}"
@@ -60,9 +61,11 @@ class StepRow(QtWidgets.QFrame):
         grid.setColumnStretch(1, 1)
 
     def show_state(self, state: str, text: str, is_next: bool, shown: bool) -> None:
-        mark, colour = NEXT_MARK if is_next else MARKS[state]
+        from workcal_wb.gui.task_panels.common import for_people
+
+        mark, colour = NEXT_MARK if is_next and state != FAILED else MARKS[state]
         self.mark.setText(f"<b style='color:{colour}'>{mark}</b>")
-        self.state.setText(text)
+        self.state.setText(for_people(text))
         title_font = self.title.font()
         title_font.setBold(shown or is_next)
         self.title.setFont(title_font)
@@ -264,6 +267,10 @@ class GuidePanel:
         self._refresh_pending = False
         if self.closed or self.doc.Name not in FreeCAD.listDocuments():
             return
+        if not self.alive():  # FreeCAD closed the dialog under us: stop following the document
+            self.closed = True
+            FreeCAD.removeDocumentObserver(self.watcher)
+            return
         if self.shown is not None:
             self.steps[self.shown].refresh()
         self._show_rows()
@@ -317,6 +324,6 @@ class GuidePanel:
         """Whether the panel's widgets still exist (FreeCAD may close the dialog under us)."""
         try:
             self.form.objectName()
-        except RuntimeError:
+        except (RuntimeError, AttributeError):  # its widgets deleted, or the form taken back by FreeCAD
             return False
         return not self.closed

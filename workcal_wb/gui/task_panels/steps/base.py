@@ -9,7 +9,8 @@ from workcal_wb.gui.task_panels import QtCore, QtWidgets
 
 translate = FreeCAD.Qt.translate
 
-DONE, TODO, ATTENTION = "done", "todo", "attention"
+# FAILED: the step was done and went wrong (a calibration that failed, a region it found empty).
+DONE, TODO, ATTENTION, FAILED = "done", "todo", "attention", "failed"
 
 
 @dataclass
@@ -117,7 +118,14 @@ def reveal(widget) -> None:
     while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
         parent = parent.parentWidget()
     if parent is not None:
-        QtCore.QTimer.singleShot(0, lambda: parent.ensureWidgetVisible(widget))
+        QtCore.QTimer.singleShot(0, lambda: _ensure_visible(parent, widget))
+
+
+def _ensure_visible(area, widget) -> None:
+    try:
+        area.ensureWidgetVisible(widget)
+    except RuntimeError:  # the panel closed meanwhile
+        pass
 
 
 class WrappingLabel(QtWidgets.QLabel):

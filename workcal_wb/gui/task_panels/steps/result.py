@@ -17,9 +17,10 @@ from workcal_wb.core import frames
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.gui import replay
 from workcal_wb.gui.task_panels import QtWidgets
+from workcal_wb.gui.task_panels.common import for_people
 from workcal_wb.gui.view import FROM_SCANNER
 
-from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
+from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
 
 translate = FreeCAD.Qt.translate
 
@@ -148,7 +149,7 @@ class ResultStep(Step):
             return (DONE, translate("WorkCal", "OK, accepted")) if calibration.Accepted else \
                 (TODO, translate("WorkCal", "OK: check it and accept it"))
         first = calibration.Reasons[0] if calibration.Reasons else ""
-        return ATTENTION, f"{status.upper()}: {first}"
+        return FAILED if status in ("failed", "error") else ATTENTION, f"{status.upper()}: {first}"
 
     def refresh(self) -> None:
         calibration, result = self.result()
@@ -165,7 +166,7 @@ class ResultStep(Step):
         self.verdict.setText(words)
         self.verdict.setStyleSheet(f"QLabel {{ background: {colour}; color: white; font-weight: bold; "
                                    "padding: 6px; border-radius: 4px; }")
-        self.reasons.setText("\n".join(f"- {r}" for r in calibration.Reasons))
+        self.reasons.setText("\n".join(f"- {for_people(r)}" for r in calibration.Reasons))
         self.reasons.setVisible(bool(calibration.Reasons))
         advice = off_model_advice(calibration)
         self.off_model.setText(advice)
