@@ -4,6 +4,8 @@ reasons worded for people, and the guide's own controls in sight on a small scre
 Each test drives the guide's pages as a designer does and reads back what the running FreeCAD shows
 (widget texts, marks, geometry) and what the document holds; a screenshot of each state is taken.
 """
+import re
+
 import numpy as np
 import pytest
 
@@ -177,6 +179,13 @@ def test_reasons_in_the_guide_have_round_numbers_and_no_command_line_flags(doc, 
     for text in shown:
         assert "--" not in text and "70.96000000000001" not in text, text
     assert "the scan shows too little of the workpiece model" in panel.steps["result"].reasons.text()
+    for name in panel.steps:  # every text and tooltip of every page: no command-line flag
+        panel.go(name)
+        for widget in panel.form.findChildren(QtWidgets.QWidget):
+            texts = [widget.toolTip()] + [widget.text()] if hasattr(widget, "text") and callable(widget.text) \
+                else [widget.toolTip()]
+            for text in texts:
+                assert not re.search(r"(?<![\w-])--[a-z]", str(text)), (name, widget.objectName(), text)
     # The force question: the calibration's reason in it, rounded, without the command line's flag.
     asked = []
     monkey = common.confirm_force
@@ -241,3 +250,102 @@ def test_a_model_loaded_for_both_roles_is_refused_naming_both(doc, tmp_path, gui
     choose_in(page.combos["reference"], "Cube")
     pump(0.1)
     assert get_setup(doc)["reference"] is other and not page.problem.isVisible()
+
+
+# --- a small screen: 1366 x 768, FreeCAD's default panel width --------------------------------------
+
+def task_view():
+    """FreeCAD's task view: the scroll area that holds the open guide."""
+    from workcal_wb.gui.task_panels.guide import GuidePanel
+
+    parent = GuidePanel.current.form.parentWidget()
+    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+        parent = parent.parentWidget()
+    assert parent is not None, "the guide is not in a task view"
+    return parent
+
+
+def in_sight(widget) -> bool:
+    """Whether the whole of ``widget`` lies within the visible part of the task view."""
+    from workcal_wb.gui.task_panels import QtCore
+
+    viewport = task_view().viewport()
+    corner = widget.mapTo(viewport, QtCore.QPoint(0, 0))
+    shown = QtCore.QRect(corner, widget.size())
+    return widget.isVisible() and viewport.rect().contains(shown)
+
+
+@pytest.fixture
+def small_screen(settle):
+    """The main window filling a 1366 x 768 screen (the run's Xvfb screen is that size), as maximised."""
+    from workcal_wb.gui.task_panels import QtGui
+
+    window = FreeCADGui.getMainWindow()
+    before = window.geometry()
+    primary = QtGui.QGuiApplication.primaryScreen()
+    screen = primary.availableGeometry()
+    pixels = tuple(round(n * primary.devicePixelRatio()) for n in (screen.width(), screen.height()))
+    if abs(pixels[0] - 1366) > 2 or abs(pixels[1] - 768) > 2:  # Xvfb may report a fractional pixel ratio
+        pytest.skip(f"run under a 1366x768 Xvfb screen (xvfb-run -s '-screen 0 1366x768x24'), not {pixels}")
+    window.setGeometry(screen)
+    settle()
+    yield window
+    window.setGeometry(before)
+
+
+def test_the_guide_opens_without_a_document_and_makes_one(workbench, pump, shoot_window):
+    from workcal_wb.gui.task_panels.guide import GuidePanel
+
+    for name in list(FreeCAD.listDocuments()):
+        FreeCAD.closeDocument(name)
+    pump(0.2)
+    assert FreeCAD.ActiveDocument is None
+    from workcal_wb.gui.commands.guide import COMMANDS
+
+    assert COMMANDS["WorkCal_Guide"].IsActive()  # the toolbar button is not greyed out
+    try:
+        FreeCADGui.runCommand("WorkCal_Guide")
+        pump(0.3)
+        panel = GuidePanel.current
+        assert FreeCAD.ActiveDocument is not None and panel is not None and panel.alive()
+        assert panel.doc is FreeCAD.ActiveDocument and panel.shown == "scan"
+        shoot_window("guide_without_a_document")
+    finally:
+        if FreeCADGui.Control.activeDialog():
+            FreeCADGui.Control.closeDialog()
+        for name in list(FreeCAD.listDocuments()):
+            FreeCAD.closeDocument(name)
+        pump(0.1)
+
+
+def test_on_a_small_screen_the_next_button_stays_in_sight_on_every_page(doc, failed_calibration, small_screen,
+                                                                        guide_of, pump, settle, shoot_window,
+                                                                        page_fits):
+    panel = guide_of("scan")
+    for name in panel.steps:
+        panel.go(name)
+        settle()
+        task_view().verticalScrollBar().setValue(task_view().verticalScrollBar().maximum())  # scrolled to the end
+        pump(0.1)
+        next_visible = panel.next_button.isVisible()
+        if next_visible:
+            assert in_sight(panel.next_button), f"{name}: the Next button is out of sight"
+        task_view().verticalScrollBar().setValue(0)
+        pump(0.1)
+        if next_visible:
+            assert in_sight(panel.next_button), f"{name}: the Next button is out of sight at the top"
+        page_fits(panel.form)
+        assert not panel.scroll.horizontalScrollBar().isVisible(), f"{name}: the page scrolls sideways"
+        shoot_window(f"small_screen_{name}")
+    # The result: W in one line per quantity, the checks table whole (it does not scroll inside the panel).
+    panel.go("result")
+    settle()
+    page = panel.steps["result"]
+    line = page.position.fontMetrics().lineSpacing()
+    for widget in (page.position, page.euler, page.omega):
+        assert widget.height() < 1.8 * line, (widget.objectName(), widget.text(), widget.height(), line)
+    assert page.rotation.height() < 2.8 * line
+    table = page.checks
+    assert not table.verticalScrollBar().isVisible() and not table.horizontalScrollBar().isVisible()
+    rows = sum(table.rowHeight(r) for r in range(table.rowCount()))
+    assert table.viewport().height() >= rows

@@ -39,7 +39,7 @@ def for_people(text: str) -> str:
     import re
 
     text = re.sub(r"\s*\((?:the CLI's |use |with |see )?--[a-z][\w-]*(?: [\w.-]+)?(?:;[^)]*)?\)", "", text)
-    text = re.sub(r"(?<![\w-])--force\b", "the Force button", text)
+    text = re.sub(r"(?<![\w-])--force\b", "forcing", text)
     text = re.sub(r"(?<![\w-])--[a-z][\w-]*-units\b", "unit", text)
     text = re.sub(r"(?<![\w-])--[a-z][\w-]*", lambda m: m.group(0)[2:].replace("-", " "), text)
     return re.sub(r"-?\d+\.\d{5,}", lambda m: f"{float(m.group(0)):.4g}", text)

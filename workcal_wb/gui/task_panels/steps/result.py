@@ -16,7 +16,7 @@ import FreeCAD
 from workcal_wb.core import frames
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.gui import replay
-from workcal_wb.gui.task_panels import QtWidgets
+from workcal_wb.gui.task_panels import QtCore, QtWidgets
 from workcal_wb.gui.task_panels.common import for_people
 from workcal_wb.gui.view import FROM_SCANNER
 
@@ -63,6 +63,8 @@ class ResultStep(Step):
         where = QtWidgets.QGroupBox(translate("WorkCal", "Where the workpiece is"))
         where.setToolTip(translate("WorkCal", "W = ^B X = V^-1 U: the workpiece frame X in the robot base frame B"))
         form = form_layout()
+        form.setRowWrapPolicy(QtWidgets.QFormLayout.WrapAllRows)  # each value the panel's width: one line
+        form.setVerticalSpacing(2)
         self.position = label(name="WorkCalPosition")
         self.rotation = label(name="WorkCalRotation")
         self.euler = label(name="WorkCalEulerZYZ")
@@ -90,6 +92,9 @@ class ResultStep(Step):
         self.checks.verticalHeader().setVisible(False)
         self.checks.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
         self.checks.setWordWrap(True)
+        # As tall as its rows (set in _fill_checks): the panel scrolls, never the table inside it.
+        self.checks.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
+        self.checks.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
         header = self.checks.horizontalHeader()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.Stretch)
         header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeToContents)
