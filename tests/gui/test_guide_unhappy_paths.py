@@ -139,8 +139,11 @@ def failed_calibration(doc, tmp_path, monkeypatch):
     points = np.random.default_rng(0).uniform(0, 60, size=(2000, 3)) + [0, 0, 500]
     set_setup(doc, scan=make_scan(doc, Cloud(points, name="scan"), "Scan"), workpiece=workpiece, reference=reference)
     doc.recompute()
+    W = np.eye(4)  # a pose with numbers as long as a real cell's
+    W[:3, :3] = np.array(FreeCAD.Rotation(FreeCAD.Vector(0.118, -0.862, -0.493), 87.123).toMatrix().A).reshape(4, 4)[:3, :3]
+    W[:3, 3] = (-1870.486, 205.048, -1170.651)
     failed = CalibrationResult(
-        status="failed", W=np.eye(4), reasons=[Reason(NOT_FOUND, "workpiece match: the scan shows too little of "
+        status="failed", W=W, reasons=[Reason(NOT_FOUND, "workpiece match: the scan shows too little of "
                                                                  "the workpiece model (use --regions auto)")],
         quality_gates=[{"name": "workpiece inliers", "value": 70.96000000000001, "limit": 80.0, "passed": False,
                         "unit": "%"}],
@@ -349,3 +352,7 @@ def test_on_a_small_screen_the_next_button_stays_in_sight_on_every_page(doc, fai
     assert not table.verticalScrollBar().isVisible() and not table.horizontalScrollBar().isVisible()
     rows = sum(table.rowHeight(r) for r in range(table.rowCount()))
     assert table.viewport().height() >= rows
+    panel.scroll.ensureWidgetVisible(page.checks)
+    pump(0.1)
+    assert in_sight(panel.next_button)
+    shoot_window("small_screen_result_W_and_checks")

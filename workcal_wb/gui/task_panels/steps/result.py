@@ -69,11 +69,12 @@ class ResultStep(Step):
         self.rotation = label(name="WorkCalRotation")
         self.euler = label(name="WorkCalEulerZYZ")
         self.omega = label(name="WorkCalOmega")
-        rows = ((translate("WorkCal", "Position"), self.position, translate("WorkCal", "W's translation, mm")),
+        # The units in the captions, so that each value fits one line of the default panel.
+        rows = ((translate("WorkCal", "Position, mm"), self.position, translate("WorkCal", "W's translation, mm")),
                 (translate("WorkCal", "Rotation"), self.rotation, translate("WorkCal", "W's rotation as FreeCAD's "
                                                                                       "placement shows it: an angle "
                                                                                       "about an axis")),
-                (translate("WorkCal", "Angles Z-Y-Z"), self.euler, translate("WorkCal", "The paper's Euler angles "
+                (translate("WorkCal", "Angles Z-Y-Z, deg"), self.euler, translate("WorkCal", "The paper's Euler angles "
                                                                                         "phi, theta, psi (Z-Y-Z)")),
                 (translate("WorkCal", "Total turn"), self.omega, translate("WorkCal", "The paper's Omega: the angle "
                                                                                       "of W's rotation about its own "
@@ -183,12 +184,12 @@ class ResultStep(Step):
                 widget.setText("-")
         else:
             pl = calibration.W
-            self.position.setText("{}, {}, {} mm".format(*(_number(v, 3) for v in W[:3, 3])))
+            self.position.setText("{}, {}, {}".format(*(_number(v, 3) for v in W[:3, 3])))
             axis = pl.Rotation.Axis
-            self.rotation.setText(translate("WorkCal", "{} deg about ({}, {}, {})").format(
+            self.rotation.setText(translate("WorkCal", "{}\u00b0 about ({}, {}, {})").format(
                 _number(math.degrees(pl.Rotation.Angle), 3), *(_number(v, 3) for v in (axis.x, axis.y, axis.z))))
             phi, theta, psi = frames.euler_zyz(W)
-            self.euler.setText("{}, {}, {} deg".format(*(_number(v, 3) for v in (phi, theta, psi))))
+            self.euler.setText("{}, {}, {}".format(*(_number(v, 3) for v in (phi, theta, psi))))
             self.omega.setText(f"{_number(frames.omega(W), 3)} deg")
         self._fill_checks(result)
         self._fill_uncertainty(calibration, result)
