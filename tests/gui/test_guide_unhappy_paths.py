@@ -356,3 +356,31 @@ def test_on_a_small_screen_the_next_button_stays_in_sight_on_every_page(doc, fai
     pump(0.1)
     assert in_sight(panel.next_button)
     shoot_window("small_screen_result_W_and_checks")
+
+
+def test_the_report_opens_in_a_tab_named_after_the_calibration_in_front(doc, tmp_path, pump, output_dir):
+    from workcal_wb.gui.commands.report import open_report, report_title
+    from workcal_wb.gui.task_panels.common import main_window
+
+    calibration = doc.addObject("App::FeaturePython", "Calibration001")
+    calibration.Label = "Left fixture"
+    html = tmp_path / "report.html"
+    html.write_text("<html><body><h1>WorkCal report</h1><p>W is known.</p></body></html>", encoding="utf-8")
+    title = report_title(calibration)
+    assert title == "Report: Left fixture"
+    where = open_report(str(html), title)
+    pump(0.5)
+    if where != "freecad":
+        pytest.skip("this FreeCAD has no web view: the report went to the system browser")
+    area = main_window().findChild(QtWidgets.QMdiArea)
+    active = area.activeSubWindow()
+    assert active is not None and active.windowTitle().startswith(title), [
+        w.windowTitle() for w in area.subWindowList()]
+    assert main_window().grab().save(str(output_dir / "report_in_front.png"))  # the web view, not a 3D view
+    # Opened again (after another window came to the front): the same one tab, in front again.
+    area.setActiveSubWindow(area.subWindowList()[0])
+    open_report(str(html), title)
+    pump(0.5)
+    area = main_window().findChild(QtWidgets.QMdiArea)
+    tabs = [w for w in area.subWindowList() if w.windowTitle().startswith(title)]
+    assert len(tabs) == 1 and area.activeSubWindow() is tabs[0]

@@ -283,12 +283,12 @@ class ResultStep(Step):
             self.guide.go("toolpath")
 
     def open_report(self) -> str:
-        from workcal_wb.gui.commands.report import open_report, write_report
+        from workcal_wb.gui.commands.report import open_report, report_title, write_report
 
         calibration = self.guide.calibration()
         paths = self.run_guarded(translate("WorkCal", "Calibration report"), lambda: write_report(calibration))
         if paths:
-            self.report_shown = open_report(paths["html"])
+            self.report_shown = open_report(paths["html"], report_title(calibration))
             return paths["html"]
         return ""
 
