@@ -384,3 +384,27 @@ def test_the_report_opens_in_a_tab_named_after_the_calibration_in_front(doc, tmp
     area = main_window().findChild(QtWidgets.QMdiArea)
     tabs = [w for w in area.subWindowList() if w.windowTitle().startswith(title)]
     assert len(tabs) == 1 and area.activeSubWindow() is tabs[0]
+
+
+def test_the_scan_is_drawn_shaded_by_its_surfaces_not_flat_grey(doc, tmp_path, guide_of, pump, settle, shoot_window):
+    from workcal_wb.cli.simulate import write_simulation
+    from workcal_wb.gui import scan_shading
+
+    write_simulation(tmp_path, "car", seed=0)
+    panel = guide_of("scan")
+    panel.steps["scan"].import_files([str(tmp_path / "scan.ply")], units="mm")
+    pump(0.3)
+    settle()
+    scan = get_setup(doc)["scan"]
+    colours = scan_shading.shown_colours(scan)  # read back from the scene graph
+    assert colours is not None and len(colours) == scan.PointCount
+    brightness = colours.mean(axis=1)
+    assert brightness.std() > 0.05 and brightness.max() - brightness.min() > 0.3  # lit, not one grey
+    assert scan_shading.shown(scan)
+    scan.ViewObject.Visibility = False
+    pump(0.1)
+    assert not scan_shading.shown(scan)  # hidden with the scan
+    scan.ViewObject.Visibility = True
+    pump(0.1)
+    assert scan_shading.shown(scan)
+    shoot_window("scan_shaded")
