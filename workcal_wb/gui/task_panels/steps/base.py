@@ -96,6 +96,7 @@ def off_model_advice(calibration) -> str:
     unexplained (the red points in the 3D view), where they lie and what to do, in plain words; "" when
     the calibration is ok or says nothing of them."""
     from workcal_wb.fc.regions import off_model
+    from workcal_wb.gui.task_panels.common import for_people
 
     if calibration is None or calibration.Status in ("ok", "new"):
         return ""
@@ -109,7 +110,7 @@ def off_model_advice(calibration) -> str:
                                                "step, or take the red points out of it with Subtract (Ctrl), then "
                                                "calibrate again.").format(region, note["count"], note["where"],
                                                                           note["change"]))
-    return "\n\n".join(paragraphs)
+    return for_people("\n\n".join(paragraphs))
 
 
 def reveal(widget) -> None:

@@ -323,7 +323,9 @@ class CalibrateStep(Step):
         if fraction is not None:
             self.progress_bar.setValue(int(round(100 * fraction)))
         if text is not None:
-            self.message.setText(text)
+            from workcal_wb.gui.task_panels.common import for_people
+
+            self.message.setText(for_people(text))
 
     def _busy(self, busy: bool) -> None:
         if not self._alive():
