@@ -26,6 +26,7 @@ class ModelsStep(Step):
     def build(self, layout) -> None:
         self.combos = {}
         self.unit_choosers = {}
+        self._unit_cache = {}  # role -> (the model's name, unit and box, its warning, the unit suggested)
         for role in ROLES:
             title, tip = self.WORDS[role]
             layout.addWidget(label(title, tip))
@@ -76,11 +77,10 @@ class ModelsStep(Step):
             return
         kind, data = fc_models.kind_of(obj)
         key = (obj.Name, units, str(data.BoundBox) if data is not None else "")
-        cache = self.__dict__.setdefault("_unit_cache", {})
-        if cache.get(role, (None,))[0] != key:
+        if self._unit_cache.get(role, (None,))[0] != key:
             text, suggestion = fc_models.model_unit_warning(obj)
-            cache[role] = (key, for_people(text), suggestion)
-        self.unit_choosers[role].show_units(units, *cache[role][1:])
+            self._unit_cache[role] = (key, for_people(text), suggestion)
+        self.unit_choosers[role].show_units(units, *self._unit_cache[role][1:])
 
     def read_in(self, role: str, units: str) -> None:
         """Read the file of the model of ``role`` again in ``units`` (recorded, one undo step)."""

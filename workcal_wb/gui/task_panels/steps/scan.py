@@ -42,16 +42,15 @@ class ScanStep(Step):
         return DONE, translate("WorkCal", "{}: {} points").format(scan.Label, f"{count:,}".replace(",", "\u2009"))
 
     def refresh(self) -> None:
-        from workcal_wb.gui.actions import scan_candidates
-
         from workcal_wb.fc.scan import declared_units
+        from workcal_wb.gui.actions import scan_candidates
 
         scan = self.setup()["scan"]
         units = getattr(scan, "Units", "") if scan is not None else ""
         source = getattr(scan, "SourceFile", "") if scan is not None else ""
         declared = bool(source) and declared_units(source) is not None
         self.info.setText(self.state()[1] + (translate("WorkCal", ", read in {} (the file says so)").format(units)
-                                             if units and (declared or not source) else ""))
+                                             if units and declared else ""))
         warning, suggestion = self._unit_warning(scan) if units and source and not declared else ("", None)
         self.unit_chooser.show_units(units if source and not declared else "", warning, suggestion)
         self.candidates = scan_candidates(self.doc)
