@@ -330,12 +330,13 @@ def test_on_a_small_screen_the_next_button_stays_in_sight_on_every_page(doc, fai
     for name in panel.steps:
         panel.go(name)
         settle()
-        task_view().verticalScrollBar().setValue(task_view().verticalScrollBar().maximum())  # scrolled to the end
+        bar = task_view().verticalScrollBar()
+        bar.setValue(bar.maximum())  # the task view scrolled to its end
         pump(0.1)
         next_visible = panel.next_button.isVisible()
         if next_visible:
             assert in_sight(panel.next_button), f"{name}: the Next button is out of sight"
-        task_view().verticalScrollBar().setValue(0)
+        task_view().verticalScrollBar().setValue(0)  # and back to its top
         pump(0.1)
         if next_visible:
             assert in_sight(panel.next_button), f"{name}: the Next button is out of sight at the top"
