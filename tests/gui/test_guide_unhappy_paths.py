@@ -1,5 +1,6 @@
 """The guide when things go wrong: files read in the wrong unit, a step that failed, a model chosen twice,
-reasons worded for people, and the guide's own controls in sight on a small screen.
+reasons worded for people, and the guide's own controls in sight on a small screen; the report in its
+own tab in front, and the scan drawn shaded.
 
 Each test drives the guide's pages as a designer does and reads back what the running FreeCAD shows
 (widget texts, marks, geometry) and what the document holds; a screenshot of each state is taken.
@@ -142,7 +143,8 @@ def failed_calibration(doc, tmp_path, monkeypatch):
     set_setup(doc, scan=make_scan(doc, Cloud(points, name="scan"), "Scan"), workpiece=workpiece, reference=reference)
     doc.recompute()
     W = np.eye(4)  # a pose with numbers as long as a real cell's
-    W[:3, :3] = np.array(FreeCAD.Rotation(FreeCAD.Vector(0.118, -0.862, -0.493), 87.123).toMatrix().A).reshape(4, 4)[:3, :3]
+    rotation = FreeCAD.Rotation(FreeCAD.Vector(0.118, -0.862, -0.493), 87.123).toMatrix()
+    W[:3, :3] = np.array(rotation.A).reshape(4, 4)[:3, :3]
     W[:3, 3] = (-1870.486, 205.048, -1170.651)
     failed = CalibrationResult(
         status="failed", W=W, reasons=[Reason(NOT_FOUND, "workpiece match: the scan shows too little of "
