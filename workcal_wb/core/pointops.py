@@ -318,12 +318,27 @@ def shading(points: np.ndarray, light_at, normals: np.ndarray | None = None) -> 
     if len(points) < 3:
         return np.ones(len(points))
     if normals is None or len(normals) != len(points):
-        normals = (estimate_normals_knn(points, SHADING_NEIGHBOURS) if len(points) > 20000
-                   else pca_normals(points, SHADING_NEIGHBOURS))
+        normals = _display_normals(points)
     towards = np.asarray(light_at, dtype=np.float64) - points
     towards /= np.maximum(lengths(towards), 1e-12)[:, None]
     facing = np.abs(np.einsum("ij,ij->i", normals, towards))
     return SHADING_AMBIENT + (1.0 - SHADING_AMBIENT) * np.nan_to_num(facing)
+
+
+# Above this many points open3d's threads estimate normals faster than scipy in one thread.
+OPEN3D_NORMALS_FROM = 20000
+
+
+def _display_normals(points: np.ndarray) -> np.ndarray:
+    """Normals good enough to shade by: open3d's for big clouds, scipy's where open3d is missing."""
+    from .errors import MissingDependency
+
+    if len(points) > OPEN3D_NORMALS_FROM:
+        try:
+            return estimate_normals_knn(points, SHADING_NEIGHBOURS)
+        except MissingDependency:  # the display goes on without open3d, only slower
+            pass
+    return pca_normals(points, SHADING_NEIGHBOURS)
 
 
 def estimate_normals_knn(points: np.ndarray, k: int) -> np.ndarray:
