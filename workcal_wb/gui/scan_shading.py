@@ -4,8 +4,9 @@ relief show.  Display only: nothing is stored in the document.
 
 The shaded copy is a ``SoSwitch`` named "WorkCalShading" in the scan's view-provider root, drawn over
 FreeCAD's own points at the same depth (``SoDepthBuffer`` LEQUAL) and under the region overlay
-(``region_display``), which comes after it in the root.  The brightness is worked out once per cloud
-and kept on the view provider's proxy.
+(``region_display``), which comes after it in the root.  The brightness is worked out once per cloud,
+in a worker thread (normals of a million points take seconds; the scan stays drawn flat meanwhile), and
+kept on the view provider's proxy.
 """
 from __future__ import annotations
 
@@ -45,39 +46,111 @@ def _node(root, create: bool, before: str | None = None):
     return switch
 
 
-def brightness(obj) -> np.ndarray:
-    """The brightness of each point of the scan ``obj`` (kept until its points or placement change)."""
-    from workcal_wb.core.pointops import shading
-    from workcal_wb.fc.scan import scan_cloud
+# How often the main thread looks whether a worker has finished (ms).
+POLL_MS = 100
+_running = {}  # (document name, object name) -> (the cloud's key, the worker's future)
 
-    proxy = getattr(getattr(obj, "ViewObject", None), "Proxy", None)
-    key = (obj.Name, getattr(obj, "PointCount", 0), str(obj.Points.BoundBox), str(obj.Placement))
-    cached = getattr(proxy, "_shading", None)
-    if cached is not None and cached[0] == key:
-        return cached[1]
-    cloud = scan_cloud(obj)
-    points = cloud.points
-    centre = np.median(points, axis=0)
-    distance = float(np.linalg.norm(centre)) or 1.0
+
+def _cloud_key(obj) -> tuple:
+    return (getattr(obj, "PointCount", 0), str(obj.Points.BoundBox), str(obj.Placement))
+
+
+def brightness_of(points: np.ndarray, normals) -> np.ndarray:
+    """The brightness of each point of a scan (thread-safe: numpy and open3d only)."""
+    from workcal_wb.core.pointops import shading
+
+    distance = float(np.linalg.norm(np.median(points, axis=0))) or 1.0
     light = np.array([LIGHT_OFFSET, -LIGHT_OFFSET, 0.0]) * distance  # the scanner stands at the scan's origin
-    values = shading(points, light, cloud.normals)
-    if proxy is not None:
-        proxy._shading = (key, values)
-    return values
+    return shading(points, light, normals)
+
+
+def _executor():
+    from concurrent.futures import ThreadPoolExecutor
+
+    global _EXECUTOR
+    if _EXECUTOR is None:
+        _EXECUTOR = ThreadPoolExecutor(max_workers=1, thread_name_prefix="WorkCalShading")
+    return _EXECUTOR
+
+
+_EXECUTOR = None
 
 
 def update(obj) -> bool:
-    """Draw the scan ``obj`` shaded; whether it is (a scan too small to shade stays flat)."""
+    """Draw the scan ``obj`` shaded: at once when its brightness is known, else once a worker has worked
+    it out (the scan stays flat meanwhile).  Whether it is drawn shaded now."""
     from workcal_wb.fc import scan as fc_scan
-    from workcal_wb.gui.region_display import OVERLAY_NAME, _local_points
 
     vobj = getattr(obj, "ViewObject", None)
     if vobj is None or getattr(vobj, "RootNode", None) is None:
         return False
+    key = _cloud_key(obj)
+    cached = getattr(vobj.Proxy, "_shading", None)
+    if cached is not None and cached[0] == key:
+        return _draw(obj, cached[1])
+    job = (obj.Document.Name, obj.Name)
+    if job in _running and _running[job][0] == key:
+        return False
     try:
-        values = brightness(obj)
+        cloud = fc_scan.scan_cloud(obj)
+    except WorkCalError:
+        return False
+    _running[job] = (key, _executor().submit(brightness_of, cloud.points, cloud.normals))
+    _poll(job)
+    return False
+
+
+def _poll(job) -> None:
+    """Draw the worker's brightness once it is there (on the main thread: Coin is not thread-safe)."""
+    import FreeCAD
+    from PySide import QtCore
+
+    key, future = _running.get(job, (None, None))
+    if future is None:
+        return
+    if not future.done():
+        QtCore.QTimer.singleShot(POLL_MS, lambda: _poll(job))
+        return
+    del _running[job]
+    doc = FreeCAD.listDocuments().get(job[0])
+    obj = doc.getObject(job[1]) if doc is not None else None
+    vobj = getattr(obj, "ViewObject", None)
+    if vobj is None or future.exception() is not None:
+        if future.exception() is not None:
+            FreeCAD.Console.PrintWarning(f"WorkCal: the scan is drawn flat: {future.exception()}\n")
+        return
+    vobj.Proxy._shading = (key, future.result())
+    if _cloud_key(obj) == key:
+        _draw(obj, future.result())
+    else:  # the points changed while the worker ran
+        update(obj)
+
+
+def wait(obj, timeout_s: float = 60.0) -> bool:
+    """Let the event loop run until the scan ``obj`` is drawn shaded (for tests and scripts); whether it is."""
+    import time
+
+    from workcal_wb.gui.task_panels.common import process_events
+
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        if shown(obj) and not any(job[1] == obj.Name for job in _running):
+            return True
+        process_events(0.05)
+    return shown(obj)
+
+
+def _draw(obj, values: np.ndarray) -> bool:
+    """Draw the scan ``obj`` with ``values`` as its points' brightness."""
+    from workcal_wb.fc import scan as fc_scan
+    from workcal_wb.gui.region_display import OVERLAY_NAME, _local_points
+
+    vobj = obj.ViewObject
+    try:
         points = _local_points(obj, fc_scan.scan_cloud(obj).points)
     except WorkCalError:
+        return False
+    if len(points) != len(values):
         return False
     coin = _coin()
     switch = _node(vobj.RootNode, create=True, before=OVERLAY_NAME)
