@@ -348,3 +348,51 @@ def test_setup_link_is_cleared_when_the_model_is_deleted(doc):
     setup.set_setup(doc, workpiece=box)
     doc.removeObject("Box")
     assert setup.get_setup(doc)["workpiece"] is None
+
+
+def test_a_scan_and_a_model_read_again_in_another_unit_are_one_undo_step_each(doc, tmp_path):
+    points_m = np.random.default_rng(3).uniform(0.0, 0.3, size=(500, 3))
+    path = tmp_path / "in_metres.xyz"
+    np.savetxt(path, points_m, fmt="%.6f")
+    obj = scan.import_scan(doc, path, "mm")
+    text, suggestion = scan.scan_unit_warning(obj)
+    assert "in_metres.xyz" in text and "read it with unit m" in text and suggestion == "m"
+    scan.change_units(obj, "m")
+    assert obj.Units == "m" and scan.scan_unit_warning(obj) == ("", None)
+    np.testing.assert_allclose(scan.scan_cloud(obj).points, points_m * 1000.0, atol=1e-3)
+    assert doc.UndoNames[0] == "Scan unit"
+    doc.undo()
+    assert obj.Units == "mm"
+    np.testing.assert_allclose(scan.scan_cloud(obj).points, points_m, atol=1e-6)
+
+    model = models.import_model(doc, path, "mm")
+    assert models.file_units(model) == "mm" and models.model_unit_warning(model)[1] == "m"
+    models.change_units(model, "m")
+    assert models.file_units(model) == "m" and models.model_unit_warning(model) == ("", None)
+    assert doc.UndoNames[0] == "Model unit"
+
+
+def test_a_scan_not_read_from_a_file_cannot_change_its_unit(doc):
+    obj = scan.make_scan(doc, sample_cloud(), "Made")
+    with pytest.raises(InputError, match="'Made' was not read from a file"):
+        scan.change_units(obj, "m")
+    with pytest.raises(InputError, match="unknown length unit"):
+        scan.change_units(obj, "furlong")
+
+
+def test_the_same_model_for_both_roles_is_refused_naming_both(doc, tmp_path):
+    path = tmp_path / "bracket.step"
+    Part.makeBox(60, 40, 20).exportStep(str(path))
+    first = models.import_model(doc, path)
+    second = models.import_model(doc, path)
+    setup.choose_models(doc, workpiece=first)
+    with pytest.raises(InputError, match=r"'bracket.step001' cannot be the reference model: it is the workpiece "
+                                         r"model 'bracket.step' again \(read from the same file bracket.step\)"):
+        setup.check_setup(doc, reference=second)
+    copy = doc.addObject("Part::Feature", "Copy")
+    copy.Shape = first.Shape.copy()
+    with pytest.raises(InputError, match="the same shape at the same place"):
+        setup.check_setup(doc, reference=copy)
+    other = doc.addObject("Part::Feature", "Cube")
+    other.Shape = Part.makeBox(60, 40, 20, FreeCAD.Vector(300, 0, 0))  # the same size elsewhere: another object
+    assert setup.check_setup(doc, reference=other)["reference"] is other

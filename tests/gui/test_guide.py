@@ -227,9 +227,9 @@ def test_05_result(step, shoot_window, check_page, scan_share):
     # The verdict in words and in colour, W as a placement and as the paper's angles, the checks.
     assert page.verdict.text().startswith("OK") and "#2e7d32" in page.verdict.styleSheet()
     x, y, z = W[:3, 3]
-    assert page.position.text() == f"{x:.3f}, {y:.3f}, {z:.3f} mm"
+    assert page.position.text() == f"{x:.3f}, {y:.3f}, {z:.3f}"
     phi, theta, psi = frames.euler_zyz(W)
-    assert page.euler.text() == f"{phi:.3f}, {theta:.3f}, {psi:.3f} deg"
+    assert page.euler.text() == f"{phi:.3f}, {theta:.3f}, {psi:.3f}"
     assert page.omega.text() == f"{frames.omega(W):.3f} deg"
     assert "phi, theta, psi" in page.euler.toolTip() and "Omega" in page.omega.toolTip()
     gates = lookups.result_of(cal).quality_gates

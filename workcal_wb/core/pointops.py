@@ -302,3 +302,48 @@ def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, spacing: float
     a, b, c = (vertices[triangles[face_ids, i]] for i in range(3))
     points = a + bary[:, :1] * (b - a) + bary[:, 1:] * (c - a)
     return points, face_ids
+
+
+# Shading for display: the share of light every point gets whatever its slope (so no point goes black),
+# and the neighbours each normal is fitted to (enough to smooth scanner noise, few enough to stay fast).
+SHADING_AMBIENT = 0.3
+SHADING_NEIGHBOURS = 12
+
+
+def shading(points: np.ndarray, light_at, normals: np.ndarray | None = None) -> np.ndarray:
+    """A brightness in [0, 1] per point, lit from ``light_at`` (the scanner: every point it saw faces it
+    more or less) by the point's surface normal: surfaces square to the scanner bright, oblique ones
+    darker.  Normals are estimated from the neighbours when not given."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if len(points) < 3:
+        return np.ones(len(points))
+    if normals is None or len(normals) != len(points):
+        normals = _display_normals(points)
+    towards = np.asarray(light_at, dtype=np.float64) - points
+    towards /= np.maximum(lengths(towards), 1e-12)[:, None]
+    facing = np.abs(np.einsum("ij,ij->i", normals, towards))
+    return SHADING_AMBIENT + (1.0 - SHADING_AMBIENT) * np.nan_to_num(facing)
+
+
+# Above this many points open3d's threads estimate normals faster than scipy in one thread.
+OPEN3D_NORMALS_FROM = 20000
+
+
+def _display_normals(points: np.ndarray) -> np.ndarray:
+    """Normals good enough to shade by: open3d's for big clouds, scipy's where open3d is missing."""
+    from .errors import MissingDependency
+
+    if len(points) > OPEN3D_NORMALS_FROM:
+        try:
+            return estimate_normals_knn(points, SHADING_NEIGHBOURS)
+        except MissingDependency:  # the display goes on without open3d, only slower
+            pass
+    return pca_normals(points, SHADING_NEIGHBOURS)
+
+
+def estimate_normals_knn(points: np.ndarray, k: int) -> np.ndarray:
+    """Unoriented unit normals from the ``k`` nearest neighbours (open3d, multi-threaded)."""
+    o3d = require_open3d()
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=k))
+    return np.asarray(pcd.normals).copy()

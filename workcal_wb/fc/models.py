@@ -135,13 +135,116 @@ def import_model_file(doc, path, units: str = "mm", name: str | None = None):
             raise InputError(f"{path}: contains no surfaces")
         obj = doc.addObject("Part::Feature", _object_name(label))
         obj.Shape = shape
+        remember_file(obj, path, "")  # a CAD file carries its own unit
     else:
         cloud = read_cloud(path, units=units)
         obj = add_model(doc, cloud, label)
+        remember_file(obj, path, units)
         for warning in cloud.warnings:
             FreeCAD.Console.PrintWarning(f"WorkCal: {warning}\n")
     obj.Label = label
     return obj
+
+
+# The file a mesh or point model was read from and the unit it was read in, kept on the object so the
+# unit can be changed later (CAD files carry their own unit, so their models have neither).
+SOURCE_FILE_PROP, UNITS_PROP, FILE_GROUP = "SourceFile", "Units", "Model file"
+
+
+def remember_file(obj, path, units: str) -> None:
+    for name, tip in ((SOURCE_FILE_PROP, "File the model was read from"),
+                      (UNITS_PROP, "Length unit the file was read in; the model is stored in mm")):
+        if name not in obj.PropertiesList:
+            obj.addProperty("App::PropertyString", name, FILE_GROUP, tip, 0, True)
+    setattr(obj, SOURCE_FILE_PROP, str(path))
+    setattr(obj, UNITS_PROP, units)
+
+
+def source_file(obj) -> str:
+    """The file the model was read from ("" when it was not read by WorkCal from a file)."""
+    return getattr(obj, SOURCE_FILE_PROP, "") or ""
+
+
+def file_units(obj) -> str:
+    """The unit a mesh or point model's file was read in ("" for CAD files and models not read from a file)."""
+    return getattr(obj, UNITS_PROP, "") if source_file(obj) else ""
+
+
+def change_units(obj, units: str):
+    """Read the model ``obj`` again from its file in ``units``, in one undo step; InputError names the model
+    when it has no file to read again or the file cannot be read."""
+    from workcal_wb.core.units import mm_per_unit
+    from workcal_wb.fc.undo import transaction
+
+    mm_per_unit(units)
+    label, path = _label(obj), source_file(obj)
+    if not file_units(obj):
+        raise InputError(f"model {label!r} was not read from a mesh or point file, so its unit cannot be changed "
+                         "(CAD files carry their own unit)")
+    if not os.path.isfile(path):
+        raise InputError(f"model {label!r}: its file {path} no longer exists, so it cannot be read again")
+    cloud = read_cloud(path, units=units)
+    doc = obj.Document
+    with transaction(doc, FreeCAD.Qt.translate("WorkCal", "Model unit")):
+        placement = obj.Placement
+        if hasattr(obj, "Mesh"):
+            import Mesh
+
+            obj.Mesh = Mesh.Mesh(([FreeCAD.Vector(*p) for p in cloud.points.tolist()],
+                                  [tuple(t) for t in cloud.triangles.tolist()]))
+        else:
+            import Points
+
+            obj.Points = Points.Points(list(map(tuple, cloud.points.tolist())))
+        obj.Placement = placement
+        setattr(obj, UNITS_PROP, units)
+        doc.recompute()
+    FreeCAD.Console.PrintMessage(f"WorkCal: {label} read again in {units}\n")
+    return obj
+
+
+def same_model(first, second) -> str:
+    """Why ``first`` and ``second`` are the same model loaded twice ("read from the same file X", "the same
+    shape"), or "" when they are not.  Cheap: file names, then counts and bounding boxes, no tessellation."""
+    files = source_file(first), source_file(second)
+    if all(files) and os.path.normcase(os.path.abspath(files[0])) == os.path.normcase(os.path.abspath(files[1])):
+        return f"read from the same file {os.path.basename(files[0])}"
+    (kind, a), (other_kind, b) = kind_of(first), kind_of(second)
+    if kind is None or kind != other_kind:
+        return ""
+    if kind == "shape":
+        size = (len(a.Faces), len(a.Edges), len(a.Vertexes), round(a.Area, 6)), \
+               (len(b.Faces), len(b.Edges), len(b.Vertexes), round(b.Area, 6))
+    elif kind == "mesh":
+        size = (a.CountPoints, a.CountFacets), (b.CountPoints, b.CountFacets)
+    else:
+        size = (a.CountPoints,), (b.CountPoints,)
+    if size[0] != size[1] or not _same_box(a.BoundBox, b.BoundBox):
+        return ""
+    return "the same shape at the same place"
+
+
+# Bounding boxes this close (mm) are the same box: float noise of a copied or re-read shape.
+SAME_BOX_MM = 1e-6
+
+
+def _same_box(a, b) -> bool:
+    return all(abs(getattr(a, k) - getattr(b, k)) <= SAME_BOX_MM
+               for k in ("XMin", "YMin", "ZMin", "XMax", "YMax", "ZMax"))
+
+
+def model_unit_warning(obj) -> tuple[str, str | None]:
+    """(warning, the unit to read it in instead) when the model's size says its file was read in the wrong
+    unit, else ("", None)."""
+    from workcal_wb.core.units import unit_warning
+
+    units = file_units(obj)
+    if not units:
+        return "", None
+    kind, data = kind_of(obj)
+    source = data.Topology[0] if kind == "mesh" else data.Points if kind == "points" else []
+    points = np.array([tuple(v) for v in source], dtype=np.float64).reshape(-1, 3)
+    return unit_warning(points, _label(obj), units)
 
 
 def import_model(doc, path, units: str = "mm"):

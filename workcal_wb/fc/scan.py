@@ -33,7 +33,7 @@ import Points
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.geometry import Cloud, checked
 from workcal_wb.core.readers import read_cloud
-from workcal_wb.core.units import extent_warnings, mm_per_unit
+from workcal_wb.core.units import extent_warnings, mm_per_unit, unit_warning
 from workcal_wb.fc.memo import LastResult
 from workcal_wb.fc.placements import matrix_of
 from workcal_wb.fc.lookups import SCAN_TYPE, is_scan, kernel_of
@@ -359,3 +359,41 @@ def import_scan(doc, path, units: str = "mm", name: str | None = None):
         FreeCAD.Console.PrintWarning(f"WorkCal: {text}\n")
     FreeCAD.Console.PrintMessage(f"WorkCal: imported {obj.Label} ({len(cloud)} points, read as {used})\n")
     return obj
+
+
+def change_units(obj, units: str):
+    """Read the scan ``obj`` again from its file in ``units`` (the unit its numbers are in), in one undo
+    step; its regions stay (the same points, in the same order).  InputError names the scan when it has
+    no file to read again, when the file declares its own unit, or when the file cannot be read."""
+    mm_per_unit(units)
+    label = getattr(obj, "Label", repr(obj))
+    if not is_scan(obj) or not getattr(obj, "SourceFile", ""):
+        raise InputError(f"scan {label!r} was not read from a file, so it cannot be read again in another unit")
+    path = obj.SourceFile
+    declared = declared_units(path)
+    if declared and declared != units:
+        raise InputError(f"scan {label!r}: its file {os.path.basename(path)} says its unit is {declared}; it is "
+                         f"read in {declared} only")
+    if not os.path.isfile(path):
+        raise InputError(f"scan {label!r}: its file {path} no longer exists, so it cannot be read again")
+    cloud = read_scan_file(path, units)
+    if len(cloud) != point_count(obj):
+        raise InputError(f"scan {label!r}: its file {os.path.basename(path)} now holds {len(cloud)} points, the "
+                         f"scan {point_count(obj)}; import it again instead")
+    doc = obj.Document
+    with transaction(doc, FreeCAD.Qt.translate("WorkCal", "Scan unit")):
+        points = np.asarray(cloud.points, dtype=np.float32).astype(np.float64)
+        obj.Points = Points.Points(list(map(tuple, points.tolist())))
+        obj.Units = units
+        doc.recompute()
+    FreeCAD.Console.PrintMessage(f"WorkCal: {label} read again in {units}\n")
+    return obj
+
+
+def scan_unit_warning(obj) -> tuple[str, str | None]:
+    """(warning, the unit to read it in instead) when the scan's size says its file was read in the wrong
+    unit, else ("", None).  Only for scans read from a file whose unit can be changed."""
+    units = getattr(obj, "Units", "") if is_scan(obj) else ""
+    if not units or not getattr(obj, "SourceFile", "") or declared_units(obj.SourceFile):
+        return "", None
+    return unit_warning(scan_cloud(obj).points, obj.Label, units)

@@ -102,6 +102,14 @@ def check_setup(doc, scan=UNCHANGED, workpiece=UNCHANGED, reference=UNCHANGED) -
                                  "(Part shape, mesh or point cloud of the object itself)")
     if final["workpiece"] is not None and final["workpiece"] is final["reference"]:
         raise InputError(f"{final['workpiece'].Label!r} cannot be both the workpiece and the reference model")
+    if final["workpiece"] is not None and final["reference"] is not None:
+        why = models.same_model(final["workpiece"], final["reference"])
+        if why:
+            newer = "reference" if chosen["reference"] is not UNCHANGED else "workpiece"
+            older = "workpiece" if newer == "reference" else "reference"
+            thing = "reference object" if newer == "reference" else "workpiece"
+            raise InputError(f"{final[newer].Label!r} cannot be the {newer} model: it is the {older} model "
+                             f"{final[older].Label!r} again ({why}). Choose the {thing}'s own model")
     if final["scan"] is not None and final["scan"] in (final["workpiece"], final["reference"]):
         raise InputError(f"{final['scan'].Label!r} cannot be both the scan and a model")
     return final

@@ -120,6 +120,8 @@ def import_model(path, doc=None, units: str | None = None, role: str | None = No
 
     doc = doc or active_document()
     ext = os.path.splitext(str(path))[1].lower()
+    if role is not None:
+        refuse_model_file_twice(doc, path, role)
     if units is None and ext not in fc_models.CAD_EXTENSIONS:
         units = ask_units()
     fc_models.read_model_file(path, units or "mm")  # a file that cannot be read is refused before it is recorded
@@ -128,6 +130,21 @@ def import_model(path, doc=None, units: str | None = None, role: str | None = No
     if role is not None:
         choose_models(doc, **{role: obj})
     return obj
+
+
+def refuse_model_file_twice(doc, path, role: str) -> None:
+    """InputError, before anything is read, when ``path`` is the file the other model was read from."""
+    from workcal_wb.fc import models as fc_models
+    from workcal_wb.fc.setup import get_setup
+
+    other = "reference" if role == "workpiece" else "workpiece"
+    chosen = get_setup(doc)[other]
+    source = fc_models.source_file(chosen) if chosen is not None else ""
+    if source and os.path.exists(source) and os.path.exists(str(path)) and os.path.samefile(source, str(path)):
+        raise InputError(translate("WorkCal", "{} is already loaded as the {} model ({!r}), so it cannot be the {} "
+                                              "model too. Load the {}'s own file").format(
+            os.path.basename(str(path)), other, chosen.Label, role,
+            translate("WorkCal", "reference object") if role == "reference" else translate("WorkCal", "workpiece")))
 
 
 def ask_for_model_file() -> str:

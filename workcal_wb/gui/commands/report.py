@@ -68,20 +68,46 @@ def write_report(calibration, out_dir: str | None = None) -> dict:
     return replay.run("workcal_wb.fc.report.write_report", calibration, result="report", **kwargs)
 
 
-def open_report(path: str) -> str:
-    """Show a report: in FreeCAD's web view when FreeCAD has one, else in the system browser.  Returns
-    where it went ("freecad" or "browser")."""
+def report_title(calibration) -> str:
+    """The name of a calibration's report tab."""
+    return translate("WorkCal", "Report: {}").format(calibration.Label)
+
+
+def open_report(path: str, title: str | None = None) -> str:
+    """Show a report in front: in a tab of FreeCAD's web view named ``title`` (default: the file's name)
+    when FreeCAD has one, the tab of an earlier report of that name replaced, else in the system browser.
+    Returns where it went ("freecad" or "browser")."""
     from workcal_wb.gui.task_panels import QtGui
 
     url = QtCore.QUrl.fromLocalFile(os.path.abspath(path)).toString()
+    title = title or os.path.basename(path)
     try:
         import WebGui
 
-        WebGui.openBrowser(url)
-        return "freecad"
+        with open(path, encoding="utf-8") as stream:
+            html = stream.read()
+        folder = QtCore.QUrl.fromLocalFile(os.path.dirname(os.path.abspath(path)) + os.sep).toString()
+        for window in report_windows(title):
+            window.close()
+        WebGui.openBrowserHTML(html, folder, title)
     except Exception:  # no web view in this FreeCAD (WebGui missing or without QtWebEngine)
         QtGui.QDesktopServices.openUrl(QtCore.QUrl(url))
         return "browser"
+    shown = report_windows(title)
+    if shown:
+        shown[-1].mdiArea().setActiveSubWindow(shown[-1])
+    return "freecad"
+
+
+def report_windows(title: str) -> list:
+    """The main window's tabs (MDI windows) showing the report named ``title``."""
+    from workcal_wb.gui.task_panels import QtWidgets
+    from workcal_wb.gui.task_panels.common import main_window
+
+    area = main_window().findChild(QtWidgets.QMdiArea)
+    if area is None:
+        return []
+    return [w for w in area.subWindowList() if w.windowTitle().split("[*]")[0].strip() == title]
 
 
 class ReportCommand(Command):
@@ -91,7 +117,8 @@ class ReportCommand(Command):
                                                    "residuals, uncertainty, checks, deviation map) and open it")
 
     def run(self):
-        open_report(write_report(calibration_for(active_document()))["html"])
+        calibration = calibration_for(active_document())
+        open_report(write_report(calibration)["html"], report_title(calibration))
 
 
 # -------------------------------------------------------------------------------------- studies

@@ -33,6 +33,18 @@ def error(text: str) -> None:
     FreeCAD.Console.PrintError(f"WorkCal: {text}\n")
 
 
+def for_people(text: str) -> str:
+    """A message from core worded for the GUI: command-line flags (``(--force)``, ``--model-units m``)
+    taken out or replaced by the GUI's own way, numbers with float noise (70.96000000000001) rounded."""
+    import re
+
+    text = re.sub(r"\s*\((?:the CLI's |use |with |see )?--[a-z][\w-]*(?: [\w.-]+)?(?:;[^)]*)?\)", "", text)
+    text = re.sub(r"(?<![\w-])--force\b", "forcing", text)
+    text = re.sub(r"(?<![\w-])--[a-z][\w-]*-units\b", "unit", text)
+    text = re.sub(r"(?<![\w-])--[a-z][\w-]*", lambda m: m.group(0)[2:].replace("-", " "), text)
+    return re.sub(r"-?\d+\.\d{5,}", lambda m: f"{float(m.group(0)):.4g}", text)
+
+
 def main_window():
     if not FreeCAD.GuiUp:
         return None
@@ -49,7 +61,7 @@ def show_error(title: str, text: str) -> None:
     """The error in the Report view and, interactively, in a message box."""
     error(text)
     if INTERACTIVE and FreeCAD.GuiUp:
-        QtWidgets.QMessageBox.critical(main_window(), title, text)
+        QtWidgets.QMessageBox.critical(main_window(), title, for_people(text))
 
 
 def guarded(title: str):
@@ -192,7 +204,7 @@ def confirm_force(reason: str, reach: bool = False) -> bool:
         box.setText(translate("WorkCal", "The calibration did not pass its quality gates."))
         question = translate("WorkCal", "Use it anyway? The result is marked FORCED; check the workpiece position by "
                                         "hand before running the program.")
-    box.setInformativeText(reason + "\n\n" + question)
+    box.setInformativeText(for_people(reason) + "\n\n" + question)
     box.setStandardButtons(QtWidgets.QMessageBox.Yes | QtWidgets.QMessageBox.No)
     box.setDefaultButton(QtWidgets.QMessageBox.No)
     return run_modal(box) == QtWidgets.QMessageBox.Yes
@@ -209,8 +221,8 @@ def with_force(action, confirm=None):
         return action(force=False)
     except (CalibrationNotOk, ReachRefused) as exc:
         reach = isinstance(exc, ReachRefused)
-        if not (confirm or (lambda reason: confirm_force(reason, reach)))(str(exc)):
-            warning(str(exc))
+        if not (confirm or (lambda reason: confirm_force(reason, reach)))(for_people(str(exc))):
+            warning(for_people(str(exc)))
             return None
     warning(translate("WorkCal", "writing a program the robot cannot follow (FORCED)") if reach else
             translate("WorkCal", "using a calibration that did not pass its gates (FORCED)"))

@@ -20,15 +20,28 @@ from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
 from workcal_wb.gui.task_panels.common import close_dialog, show_panel
-from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, STEPS, TODO
+from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, FAILED, STEPS, TODO
 from workcal_wb.gui.task_panels.steps.base import reveal
 
 translate = FreeCAD.Qt.translate
 
-MARKS = {DONE: ("\u2713", "#2e7d32"), TODO: ("\u25cb", "#777777"), ATTENTION: ("!", "#d06000")}
+MARKS = {DONE: ("\u2713", "#2e7d32"), TODO: ("\u25cb", "#777777"), ATTENTION: ("!", "#d06000"),
+         FAILED: ("\u2717", "#c62828")}
 NEXT_MARK = ("\u25b6", "#2a62b0")
 NEXT_STYLE = "QFrame#{} {{ background: #dce8f7; border-left: 3px solid #2a62b0; border-radius: 3px; }}"
 SHOWN_STYLE = "QFrame#{} {{ border: 1px solid #9aa4ae; border-radius: 3px; }}"
+
+
+# A step's state in the list is cut to about this many characters (two lines of the default panel); the
+# whole of it is in the row's tooltip and on the step's page.
+STATE_CHARS = 70
+
+
+def short(text: str) -> str:
+    """The state as the step list shows it: whole when short, else cut at a word with an ellipsis."""
+    if len(text) <= STATE_CHARS:
+        return text
+    return text[:STATE_CHARS].rsplit(" ", 1)[0].rstrip(",;:(") + "\u2026"
 
 
 class StepRow(QtWidgets.QFrame):
@@ -60,9 +73,13 @@ class StepRow(QtWidgets.QFrame):
         grid.setColumnStretch(1, 1)
 
     def show_state(self, state: str, text: str, is_next: bool, shown: bool) -> None:
-        mark, colour = NEXT_MARK if is_next else MARKS[state]
+        from workcal_wb.gui.task_panels.common import for_people
+
+        mark, colour = NEXT_MARK if is_next and state != FAILED else MARKS[state]
         self.mark.setText(f"<b style='color:{colour}'>{mark}</b>")
-        self.state.setText(text)
+        text = for_people(text)
+        self.state.setText(short(text))
+        self.state.setToolTip(text if short(text) != text else "")
         title_font = self.title.font()
         title_font.setBold(shown or is_next)
         self.title.setFont(title_font)
@@ -71,6 +88,78 @@ class StepRow(QtWidgets.QFrame):
 
     def mouseReleaseEvent(self, event):  # noqa: N802  (Qt's name)
         self.clicked.emit()
+
+
+class PageScroll(QtWidgets.QScrollArea):
+    """The guide's scroll area: as wide as its content needs (plus its scroll bar), so the content is never
+    cut at the right; only the height is the task view's to give."""
+
+    def minimumSizeHint(self):  # noqa: N802  (Qt's name)
+        hint = super().minimumSizeHint()
+        content = self.widget()
+        if content is not None:
+            hint.setWidth(content.minimumSizeHint().width() + self.verticalScrollBar().sizeHint().width())
+        return hint
+
+    def sizeHint(self):  # noqa: N802
+        hint = super().sizeHint()
+        hint.setWidth(self.minimumSizeHint().width())
+        return hint
+
+
+class FitToTaskView(QtCore.QObject):
+    """Keeps the guide's form as tall as the room FreeCAD's task view shows below the form's top, so the
+    task view itself never scrolls: the guide's own scroll area takes the overflow and the button under it
+    stays in sight.  Follows the task view's resizes (the window, the docks)."""
+
+    # Never shorter than this (px): a few lines of the page and the button, on the smallest screens.
+    MIN_HEIGHT = 240
+    # Room left below the form for the task box's frame and the task view's margin (px).
+    BOTTOM_MARGIN = 16
+
+    def __init__(self, form):
+        super().__init__(form)
+        self.form = form
+        self.area = None
+        QtCore.QTimer.singleShot(0, self.attach)
+
+    def attach(self) -> None:
+        try:
+            parent = self.form.parentWidget()
+        except RuntimeError:  # the panel closed before it was shown
+            return
+        while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+            parent = parent.parentWidget()
+        if parent is None:  # not shown in a task view (yet)
+            return
+        self.area = parent
+        parent.viewport().installEventFilter(self)
+        self.fit()
+
+    def eventFilter(self, watched, event):  # noqa: N802  (Qt's name)
+        if event.type() == QtCore.QEvent.Resize:
+            QtCore.QTimer.singleShot(0, self.fit)
+        return False
+
+    def fit(self) -> None:
+        try:
+            viewport = self.area.viewport()
+            top = self.form.mapTo(self.area.widget(), QtCore.QPoint(0, 0)).y()
+        except (RuntimeError, AttributeError):
+            return
+        height = max(self.MIN_HEIGHT, viewport.height() - top - self.BOTTOM_MARGIN)
+        if self.form.minimumHeight() != height:
+            self.form.setFixedHeight(height)
+        QtCore.QTimer.singleShot(0, self.trim)
+
+    def trim(self) -> None:
+        """Take off what still makes the task view scroll (its frames and margins, measured once laid out)."""
+        try:
+            overflow = self.area.verticalScrollBar().maximum()
+        except (RuntimeError, AttributeError):
+            return
+        if overflow > 0 and self.form.height() - overflow >= self.MIN_HEIGHT:
+            self.form.setFixedHeight(self.form.height() - overflow)
 
 
 class DocumentWatcher:
@@ -128,11 +217,15 @@ class GuidePanel:
         self.go(step or self.next_step())
 
     @classmethod
-    def open(cls, doc, step: str | None = None):
+    def open(cls, doc=None, step: str | None = None):
         """The guide of ``doc`` at ``step`` (default: the next step to do), the open one switched to it;
         returns the panel.  A step reopens its guide through this (``self.guide.open``) after a panel
-        that took the guide's place closes."""
+        that took the guide's place closes.  Without ``doc`` it does nothing: FreeCAD calls ``open()`` of
+        every task dialog it shows."""
         import FreeCADGui
+
+        if doc is None:
+            return None
 
         current = cls.current
         if current is not None and current.alive() and FreeCADGui.Control.activeDialog():
@@ -144,11 +237,23 @@ class GuidePanel:
 
     # ------------------------------------------------------------------ widgets
     def _build(self):
+        """The step list and the page scroll inside the panel; the Next button stays below them, in sight:
+        the form is kept as tall as the part of FreeCAD's task view it can show (``FitToTaskView``)."""
         form = QtWidgets.QWidget()
         form.setObjectName("WorkCalGuide")
         form.setWindowTitle(translate("WorkCal", "WorkCal calibration"))
         form.setWindowIcon(QtGui.QIcon(workcal_wb.icon("WorkCal_Guide")))
-        layout = QtWidgets.QVBoxLayout(form)
+        outer = QtWidgets.QVBoxLayout(form)
+        outer.setContentsMargins(0, 0, 0, 0)
+        outer.setSpacing(4)
+        self.scroll = PageScroll()
+        self.scroll.setObjectName("WorkCalGuideScroll")
+        self.scroll.setWidgetResizable(True)
+        self.scroll.setFrameShape(QtWidgets.QFrame.NoFrame)
+        content = QtWidgets.QWidget()
+        content.setObjectName("WorkCalGuideContent")
+        layout = QtWidgets.QVBoxLayout(content)
+        layout.setContentsMargins(2, 2, 4, 2)  # narrow: the scroll bar beside it takes the width they would
         layout.setSpacing(4)
         self.rows = {}
         for number, (name, step) in enumerate(self.steps.items(), 1):
@@ -171,11 +276,14 @@ class GuidePanel:
         for step in self.steps.values():
             self.stack.addWidget(step.widget)
         layout.addWidget(self.stack)
+        layout.addStretch(1)
+        self.scroll.setWidget(content)
+        outer.addWidget(self.scroll, 1)
         self.next_button = QtWidgets.QPushButton()
         self.next_button.setObjectName("WorkCalNextStep")
         self.next_button.clicked.connect(lambda: self.go(self.next_step()))
-        layout.addWidget(self.next_button)
-        layout.addStretch(1)
+        outer.addWidget(self.next_button)
+        self.fitter = FitToTaskView(form)
         return form
 
     def view(self):
@@ -260,6 +368,10 @@ class GuidePanel:
         self._refresh_pending = False
         if self.closed or self.doc.Name not in FreeCAD.listDocuments():
             return
+        if not self.alive():  # FreeCAD closed the dialog under us: stop following the document
+            self.closed = True
+            FreeCAD.removeDocumentObserver(self.watcher)
+            return
         if self.shown is not None:
             self.steps[self.shown].refresh()
         self._show_rows()
@@ -313,6 +425,6 @@ class GuidePanel:
         """Whether the panel's widgets still exist (FreeCAD may close the dialog under us)."""
         try:
             self.form.objectName()
-        except RuntimeError:
+        except (RuntimeError, AttributeError):  # its widgets deleted, or the form taken back by FreeCAD
             return False
         return not self.closed

@@ -5,7 +5,7 @@ ATTENTION and a few words) and a scene (``scene()``): which objects the 3D view 
 labels while the step is open.  Pages are built for FreeCAD's default task panel width: one column,
 labels that wrap, the paper's symbols in tooltips rather than in the labels.
 """
-from .base import ATTENTION, DONE, TODO, Scene, Step
+from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step
 from .calibrate import CalibrateStep
 from .export import ExportStep
 from .models import ModelsStep
@@ -16,4 +16,4 @@ from .toolpath import ToolpathStep
 
 STEPS = (ScanStep, ModelsStep, RegionsStep, CalibrateStep, ResultStep, ToolpathStep, ExportStep)
 
-__all__ = ["ATTENTION", "DONE", "TODO", "Scene", "Step", "STEPS"]
+__all__ = ["ATTENTION", "DONE", "FAILED", "TODO", "Scene", "Step", "STEPS"]

@@ -9,7 +9,8 @@ from workcal_wb.gui.task_panels import QtCore, QtWidgets
 
 translate = FreeCAD.Qt.translate
 
-DONE, TODO, ATTENTION = "done", "todo", "attention"
+# FAILED: the step was done and went wrong (a calibration that failed, a region it found empty).
+DONE, TODO, ATTENTION, FAILED = "done", "todo", "attention", "failed"
 
 
 @dataclass
@@ -34,6 +35,11 @@ class Step:
         self.widget.setObjectName(f"WorkCalPage_{self.NAME}")
         layout = QtWidgets.QVBoxLayout(self.widget)
         layout.setContentsMargins(0, 0, 0, 0)
+        # What went wrong in the page's last action, at its top: the file or object and what is wrong.
+        self.problem = label(name=f"WorkCalProblem_{self.NAME}")
+        self.problem.setStyleSheet("QLabel { color: #c62828; }")
+        self.problem.setVisible(False)
+        layout.addWidget(self.problem)
         self.build(layout)
         layout.addStretch(1)
 
@@ -58,12 +64,31 @@ class Step:
         reveal(widget)
 
     def run_guarded(self, title: str, action):
-        """Run ``action()`` as a command runs: errors become messages (Report view and, interactively, a box)."""
-        from workcal_wb.gui.task_panels.common import guarded
+        """Run ``action()`` as a command runs, nothing raised escaping: a refusal (WorkCalError) is shown at
+        the top of the page and in the Report view; a bug's traceback goes to the Report view only."""
+        from workcal_wb.core.errors import Cancelled, WorkCalError
+        from workcal_wb.gui.task_panels.common import error, for_people, guarded
 
-        result = guarded(title)(action)()
+        def shown_on_the_page():
+            try:
+                return action()
+            except Cancelled:
+                raise
+            except WorkCalError as exc:
+                error(str(exc))
+                self.show_problem(for_people(str(exc)))
+                return None
+
+        self.show_problem("")
+        result = guarded(title)(shown_on_the_page)()
         self.guide.refresh()
         return result
+
+    def show_problem(self, text: str) -> None:
+        self.problem.setText(text)
+        self.problem.setVisible(bool(text))
+        if text:
+            reveal(self.problem)
 
 
 def off_model_advice(calibration) -> str:
@@ -71,6 +96,7 @@ def off_model_advice(calibration) -> str:
     unexplained (the red points in the 3D view), where they lie and what to do, in plain words; "" when
     the calibration is ok or says nothing of them."""
     from workcal_wb.fc.regions import off_model
+    from workcal_wb.gui.task_panels.common import for_people
 
     if calibration is None or calibration.Status in ("ok", "new"):
         return ""
@@ -84,7 +110,7 @@ def off_model_advice(calibration) -> str:
                                                "step, or take the red points out of it with Subtract (Ctrl), then "
                                                "calibrate again.").format(region, note["count"], note["where"],
                                                                           note["change"]))
-    return "\n\n".join(paragraphs)
+    return for_people("\n\n".join(paragraphs))
 
 
 def reveal(widget) -> None:
@@ -93,7 +119,14 @@ def reveal(widget) -> None:
     while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
         parent = parent.parentWidget()
     if parent is not None:
-        QtCore.QTimer.singleShot(0, lambda: parent.ensureWidgetVisible(widget))
+        QtCore.QTimer.singleShot(0, lambda: _ensure_visible(parent, widget))
+
+
+def _ensure_visible(area, widget) -> None:
+    try:
+        area.ensureWidgetVisible(widget)
+    except RuntimeError:  # the panel closed meanwhile
+        pass
 
 
 class WrappingLabel(QtWidgets.QLabel):
@@ -145,6 +178,52 @@ def combo(name: str, tip: str) -> QtWidgets.QComboBox:
     widget.setSizeAdjustPolicy(QtWidgets.QComboBox.AdjustToMinimumContentsLengthWithIcon)
     widget.setMinimumContentsLength(8)
     return widget
+
+
+class UnitChooser(QtWidgets.QWidget):
+    """The unit a file was read in, to be changed (``on_change(unit)``), and under it a warning when the
+    size it gives makes no sense, with the one-click fix ("Read it in m")."""
+
+    def __init__(self, name: str, on_change):
+        from workcal_wb.gui.actions import UNIT_CHOICES
+
+        super().__init__()
+        self.setObjectName(name)
+        self.on_change = on_change
+        self.suggestion = None
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.combo = combo(f"{name}_units", translate("WorkCal", "The length unit of the numbers in the file; "
+                                                                 "choosing another reads the file again in it"))
+        for unit in UNIT_CHOICES:
+            self.combo.addItem(unit, unit)
+        self.combo.activated.connect(lambda index: self.on_change(self.combo.itemData(index)))
+        caption = QtWidgets.QLabel(translate("WorkCal", "Read in"))
+        caption.setToolTip(self.combo.toolTip())
+        line = QtWidgets.QHBoxLayout()
+        line.addWidget(caption)
+        line.addWidget(self.combo, 1)
+        layout.addLayout(line)
+        self.warning = label(name=f"{name}_warning")
+        self.warning.setStyleSheet("QLabel { color: #b04a00; }")
+        layout.addWidget(self.warning)
+        self.fix = button("", translate("WorkCal", "Read the file again in the unit its size suggests"),
+                          lambda: self.on_change(self.suggestion), f"{name}_fix")
+        layout.addWidget(self.fix)
+
+    def show_units(self, units: str, warning: str = "", suggestion=None) -> None:
+        """Show ``units`` ("" hides the chooser: no file whose unit can change) and the warning, if any."""
+        self.setVisible(bool(units))
+        self.combo.blockSignals(True)
+        self.combo.setCurrentIndex(self.combo.findData(units))
+        self.combo.blockSignals(False)
+        self.suggestion = suggestion
+        if warning and warning != self.warning.text():
+            reveal(self.warning)
+        self.warning.setText(warning)
+        self.warning.setVisible(bool(warning))
+        self.fix.setText(translate("WorkCal", "Read it in {}").format(suggestion) if suggestion else "")
+        self.fix.setVisible(bool(suggestion))
 
 
 def row(*widgets) -> QtWidgets.QHBoxLayout:

@@ -21,7 +21,7 @@ from workcal_wb.fc import prefs
 from workcal_wb.gui import replay
 from workcal_wb.gui.task_panels import QtCore, QtWidgets
 
-from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
+from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
 
 translate = FreeCAD.Qt.translate
 
@@ -180,8 +180,13 @@ class CalibrateStep(Step):
         if calibration is None:
             return TODO, translate("WorkCal", "Find where the workpiece is")
         if calibration.Status == "error":
-            return ATTENTION, translate("WorkCal", "Could not calibrate: {}").format(
+            return FAILED, translate("WorkCal", "Could not calibrate: {}").format(
                 calibration.Reasons[0] if calibration.Reasons else "")
+        if calibration.Status == "failed":
+            return FAILED, translate("WorkCal", "FAILED in {:.1f} s: {}").format(
+                calibration.Seconds, calibration.Reasons[0] if calibration.Reasons else "")
+        if calibration.Status == "ambiguous":
+            return ATTENTION, translate("WorkCal", "Calibrated in {:.1f} s, ambiguous").format(calibration.Seconds)
         return DONE, translate("WorkCal", "Calibrated in {:.1f} s").format(calibration.Seconds)
 
     def refresh(self) -> None:
@@ -318,7 +323,9 @@ class CalibrateStep(Step):
         if fraction is not None:
             self.progress_bar.setValue(int(round(100 * fraction)))
         if text is not None:
-            self.message.setText(text)
+            from workcal_wb.gui.task_panels.common import for_people
+
+            self.message.setText(for_people(text))
 
     def _busy(self, busy: bool) -> None:
         if not self._alive():

@@ -58,21 +58,20 @@ class ExportStep(Step):
         self.tilt.setSingleStep(0.05)
         self.tilt.setSuffix(" deg")
         self.tilt.setValue(DEFAULT_VERTICAL_TOL_DEG)
-        self.tilt.setToolTip(translate("WorkCal", "3-axis machine: how far W may tilt the tool from the machine's Z "
-                                                  "(the CLI's --vertical-tol)"))
-        self.rotary = combo("WorkCal_rotary", translate("WorkCal", "5-axis machine: its two rotary axes (the CLI's "
-                                                                   "--rotary)"))
+        self.tilt.setToolTip(translate("WorkCal", "3-axis machine: how far W may tilt the tool from the machine's "
+                                                  "Z"))
+        self.rotary = combo("WorkCal_rotary", translate("WorkCal", "5-axis machine: its two rotary axes"))
         for name in ROTARY:
             self.rotary.addItem(ROTARY_WORDS.get(name, name.upper()), name)
         self.robot = combo("WorkCal_robot", translate(
             "WorkCal", "The robot that runs the program: every move is checked against its reach, joint limits and "
                        "singularities before the program is written, and the program carries the configuration "
-                       "solved (the CLI's --robot); with None the program says its reach was not checked. Only "
+                       "solved; with None the program says its reach was not checked. Only "
                        "robots whose controller runs the chosen language are listed"))
         self.tcp = QtWidgets.QLineEdit(NO_TOOL)
         self.tcp.setObjectName("WorkCal_tcp")
         self.tcp.setToolTip(translate("WorkCal", "The TCP in the robot's flange frame: X, Y, Z in mm and A, B, C in "
-                                                 "degrees, R = Rz(A) Ry(B) Rx(C) (the CLI's --tool)"))
+                                                 "degrees, R = Rz(A) Ry(B) Rx(C)"))
         self.robot_title = QtWidgets.QLabel(translate("WorkCal", "Robot"))
         self.tcp_title = QtWidgets.QLabel(translate("WorkCal", "TCP (X, Y, Z, A, B, C)"))
         self.tilt_title = QtWidgets.QLabel(translate("WorkCal", "Tilt allowed"))

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import FreeCAD
 
-from .base import DONE, TODO, Scene, Step, button, combo, label
+from .base import DONE, TODO, Scene, Step, UnitChooser, button, combo, label
 
 translate = FreeCAD.Qt.translate
 
@@ -25,6 +25,8 @@ class ModelsStep(Step):
 
     def build(self, layout) -> None:
         self.combos = {}
+        self.unit_choosers = {}
+        self._unit_cache = {}  # role -> (the model's name, unit and box, its warning, the unit suggested)
         for role in ROLES:
             title, tip = self.WORDS[role]
             layout.addWidget(label(title, tip))
@@ -36,6 +38,8 @@ class ModelsStep(Step):
                                     translate("WorkCal", "STEP, IGES, BREP, STL, OBJ, OFF, PLY or a point file"),
                                     lambda r=role: self.ask_and_import(r), f"WorkCal_{role}_file"))
             self.combos[role] = chooser
+            self.unit_choosers[role] = UnitChooser(f"WorkCal_{role}_unit", lambda units, r=role: self.read_in(r, units))
+            layout.addWidget(self.unit_choosers[role])
         layout.addWidget(label(translate(
             "WorkCal", "The workpiece model is used in its own frame, the toolpath's. The reference model must "
                        "stand where the reference object stands for the robot.")))
@@ -60,6 +64,35 @@ class ModelsStep(Step):
                 chooser.addItem(obj.Label, obj.Name)
             chooser.setCurrentIndex(self.candidates.index(chosen[role]) if chosen[role] in self.candidates else -1)
             chooser.blockSignals(False)
+            self._show_units(role, chosen[role])
+
+    def _show_units(self, role: str, obj) -> None:
+        """The unit the model's file was read in, and a warning when the size it gives makes no sense."""
+        from workcal_wb.fc import models as fc_models
+        from workcal_wb.gui.task_panels.common import for_people
+
+        units = fc_models.file_units(obj) if obj is not None else ""
+        if not units:
+            self.unit_choosers[role].show_units("")
+            return
+        kind, data = fc_models.kind_of(obj)
+        key = (obj.Name, units, str(data.BoundBox) if data is not None else "")
+        if self._unit_cache.get(role, (None,))[0] != key:
+            text, suggestion = fc_models.model_unit_warning(obj)
+            self._unit_cache[role] = (key, for_people(text), suggestion)
+        self.unit_choosers[role].show_units(units, *self._unit_cache[role][1:])
+
+    def read_in(self, role: str, units: str) -> None:
+        """Read the file of the model of ``role`` again in ``units`` (recorded, one undo step)."""
+        from workcal_wb.fc import models as fc_models
+        from workcal_wb.gui import replay
+
+        obj = self.setup()[role]
+        if obj is None or not units or units == fc_models.file_units(obj):
+            return
+        self.run_guarded(translate("WorkCal", "Model unit"),
+                         lambda: replay.run("workcal_wb.fc.models.change_units", obj, units, result="model"))
+        self.guide.go(self.NAME)
 
     def select(self, role: str, obj) -> None:
         """Choose ``obj`` as the model of ``role`` (recorded), as picking it in the list does."""

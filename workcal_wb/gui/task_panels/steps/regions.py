@@ -8,7 +8,7 @@ import FreeCAD
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.gui.view import FROM_SCANNER
 
-from .base import DONE, TODO, Scene, Step, button, label, row
+from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step, button, label, row
 
 translate = FreeCAD.Qt.translate
 
@@ -57,11 +57,13 @@ class RegionsStep(Step):
         if found.get("workpiece") is None and found.get("reference") is None:
             used = self._calibration_regions()
             if used:
-                return DONE, translate("WorkCal", "found by the calibration: workpiece {} points, reference {}").format(
-                    *(0 if used.get(r) is None else len(used[r]) for r in ("workpiece", "reference")))
+                counts = [0 if used.get(r) is None else len(used[r]) for r in ("workpiece", "reference")]
+                return DONE if all(counts) else FAILED, translate(
+                    "WorkCal", "found by the calibration: workpiece {} points, reference {}").format(*counts)
             return TODO, translate("WorkCal", "Find the workpiece and the reference object in the scan")
         how = translate("WorkCal", "found") if found.get("source") == "auto" else translate("WorkCal", "picked")
-        return DONE, translate("WorkCal", "{}: workpiece {} points, reference {}").format(
+        counts = [0 if found.get(r) is None else len(found[r]) for r in ("workpiece", "reference")]
+        return DONE if all(counts) else ATTENTION, translate("WorkCal", "{}: workpiece {} points, reference {}").format(
             how, *(0 if found.get(r) is None else len(found[r]) for r in ("workpiece", "reference")))
 
     def _calibration_regions(self) -> dict:

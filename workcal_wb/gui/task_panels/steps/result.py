@@ -16,10 +16,11 @@ import FreeCAD
 from workcal_wb.core import frames
 from workcal_wb.core.errors import WorkCalError
 from workcal_wb.gui import replay
-from workcal_wb.gui.task_panels import QtWidgets
+from workcal_wb.gui.task_panels import QtCore, QtWidgets
+from workcal_wb.gui.task_panels.common import for_people
 from workcal_wb.gui.view import FROM_SCANNER
 
-from .base import ATTENTION, DONE, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
+from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step, button, form_layout, label, off_model_advice, row
 
 translate = FreeCAD.Qt.translate
 
@@ -62,15 +63,18 @@ class ResultStep(Step):
         where = QtWidgets.QGroupBox(translate("WorkCal", "Where the workpiece is"))
         where.setToolTip(translate("WorkCal", "W = ^B X = V^-1 U: the workpiece frame X in the robot base frame B"))
         form = form_layout()
+        form.setRowWrapPolicy(QtWidgets.QFormLayout.WrapAllRows)  # each value the panel's width: one line
+        form.setVerticalSpacing(2)
         self.position = label(name="WorkCalPosition")
         self.rotation = label(name="WorkCalRotation")
         self.euler = label(name="WorkCalEulerZYZ")
         self.omega = label(name="WorkCalOmega")
-        rows = ((translate("WorkCal", "Position"), self.position, translate("WorkCal", "W's translation, mm")),
+        # The units in the captions, so that each value fits one line of the default panel.
+        rows = ((translate("WorkCal", "Position, mm"), self.position, translate("WorkCal", "W's translation, mm")),
                 (translate("WorkCal", "Rotation"), self.rotation, translate("WorkCal", "W's rotation as FreeCAD's "
                                                                                       "placement shows it: an angle "
                                                                                       "about an axis")),
-                (translate("WorkCal", "Angles Z-Y-Z"), self.euler, translate("WorkCal", "The paper's Euler angles "
+                (translate("WorkCal", "Angles Z-Y-Z, deg"), self.euler, translate("WorkCal", "The paper's Euler angles "
                                                                                         "phi, theta, psi (Z-Y-Z)")),
                 (translate("WorkCal", "Total turn"), self.omega, translate("WorkCal", "The paper's Omega: the angle "
                                                                                       "of W's rotation about its own "
@@ -89,6 +93,9 @@ class ResultStep(Step):
         self.checks.verticalHeader().setVisible(False)
         self.checks.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
         self.checks.setWordWrap(True)
+        # As tall as its rows (set in _fill_checks): the panel scrolls, never the table inside it.
+        self.checks.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
+        self.checks.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
         header = self.checks.horizontalHeader()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.Stretch)
         header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeToContents)
@@ -148,7 +155,7 @@ class ResultStep(Step):
             return (DONE, translate("WorkCal", "OK, accepted")) if calibration.Accepted else \
                 (TODO, translate("WorkCal", "OK: check it and accept it"))
         first = calibration.Reasons[0] if calibration.Reasons else ""
-        return ATTENTION, f"{status.upper()}: {first}"
+        return FAILED if status in ("failed", "error") else ATTENTION, f"{status.upper()}: {first}"
 
     def refresh(self) -> None:
         calibration, result = self.result()
@@ -165,7 +172,7 @@ class ResultStep(Step):
         self.verdict.setText(words)
         self.verdict.setStyleSheet(f"QLabel {{ background: {colour}; color: white; font-weight: bold; "
                                    "padding: 6px; border-radius: 4px; }")
-        self.reasons.setText("\n".join(f"- {r}" for r in calibration.Reasons))
+        self.reasons.setText("\n".join(f"- {for_people(r)}" for r in calibration.Reasons))
         self.reasons.setVisible(bool(calibration.Reasons))
         advice = off_model_advice(calibration)
         self.off_model.setText(advice)
@@ -177,12 +184,12 @@ class ResultStep(Step):
                 widget.setText("-")
         else:
             pl = calibration.W
-            self.position.setText("{}, {}, {} mm".format(*(_number(v, 3) for v in W[:3, 3])))
+            self.position.setText("{}, {}, {}".format(*(_number(v, 3) for v in W[:3, 3])))
             axis = pl.Rotation.Axis
-            self.rotation.setText(translate("WorkCal", "{} deg about ({}, {}, {})").format(
+            self.rotation.setText(translate("WorkCal", "{}\u00b0 about ({}, {}, {})").format(
                 _number(math.degrees(pl.Rotation.Angle), 3), *(_number(v, 3) for v in (axis.x, axis.y, axis.z))))
             phi, theta, psi = frames.euler_zyz(W)
-            self.euler.setText("{}, {}, {} deg".format(*(_number(v, 3) for v in (phi, theta, psi))))
+            self.euler.setText("{}, {}, {}".format(*(_number(v, 3) for v in (phi, theta, psi))))
             self.omega.setText(f"{_number(frames.omega(W), 3)} deg")
         self._fill_checks(result)
         self._fill_uncertainty(calibration, result)
@@ -276,12 +283,12 @@ class ResultStep(Step):
             self.guide.go("toolpath")
 
     def open_report(self) -> str:
-        from workcal_wb.gui.commands.report import open_report, write_report
+        from workcal_wb.gui.commands.report import open_report, report_title, write_report
 
         calibration = self.guide.calibration()
         paths = self.run_guarded(translate("WorkCal", "Calibration report"), lambda: write_report(calibration))
         if paths:
-            self.report_shown = open_report(paths["html"])
+            self.report_shown = open_report(paths["html"], report_title(calibration))
             return paths["html"]
         return ""
 
