@@ -67,7 +67,7 @@ def depth_camera_scan(mesh: Cloud, seed: int) -> DepthCameraScan:
     side = int(2 * 1.3 * (radius + CROP_MARGIN_MM) / pixel) + 8
     scanner = Scanner(position, target, pixel_pitch_mm=pixel, image_size=(side, side), noise_sigma_mm=noise,
                       z_resolution_mm=0.0, mixed_pixel_share=mixed, seed=int(rng.integers(2**31)))
-    scan = scanner.scan(scene)
+    scan = scanner.scan(scene, cast_rays=False)  # rasterised on every stack: the same scans everywhere
     S_B = frames.invert(scan.B_S)
     kept = np.linalg.norm(scan.points - frames.apply(S_B, target[None])[0], axis=1) <= radius + CROP_MARGIN_MM
     motion = frames.from_rotvec(rng.normal(size=3), rng.uniform(-500.0, 500.0, 3))
