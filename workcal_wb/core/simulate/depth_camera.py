@@ -13,9 +13,9 @@ than its half diagonal, which keeps the table and parts of the neighbours.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from dataclasses import dataclass
+
+import numpy as np
 
 from .. import frames
 from ..geometry import Cloud
@@ -25,13 +25,18 @@ from .scene import PLATFORM_POSE, Scene, SceneObject
 
 ELEVATION_DEG, DISTANCE_MM = (20.0, 60.0), (500.0, 900.0)
 PIXEL_MM, NOISE_MM, MIXED_SHARE = (1.2, 2.0), (1.0, 2.0), (0.02, 0.05)
-# The neighbours stand this far (mm) from the part's outline seen from above.
-NEIGHBOUR_GAP_MM = (15.0, 60.0)
+# The neighbours stand this far (mm) from the part's outline seen from above, their centres about
+# NEIGHBOUR_RADIUS_MM further (half the box's diagonal), each within NEIGHBOUR_SPREAD_RAD of opposite sides.
+NEIGHBOUR_GAP_MM, NEIGHBOUR_RADIUS_MM, NEIGHBOUR_SPREAD_RAD = (15.0, 60.0), 35.0, 0.6
 CROP_MARGIN_MM = 20.0
+# The image is this much wider than the crop, so that the crop is never cut by the image's edge.
+IMAGE_MARGIN = 1.3
 
 
 @dataclass
 class DepthCameraScan:
+    """A depth camera's cropped scan with its truth."""
+
     points: np.ndarray  # (N, 3) mm
     roles: np.ndarray  # per point: platform, workpiece, clutter or mixed
     U: np.ndarray  # ^S X
@@ -49,13 +54,13 @@ def depth_camera_scan(mesh: Cloud, seed: int) -> DepthCameraScan:
     objects = [SceneObject("platform", shapes.platform(), PLATFORM_POSE, "platform"),
                SceneObject(mesh.name, mesh, PLATFORM_POSE @ part, "workpiece")]
     first = rng.uniform(0.0, 2 * np.pi)
-    for mesh_, lift, turn in ((shapes.box((60.0, 40.0, 30.0), edge_mm=3.0, name="box"), 30.0, 0.0),
-                              (shapes.cylinder(20.0, 50.0, edge_mm=3.0, name="cylinder"), 0.0, np.pi)):
-        way = first + turn + rng.uniform(-0.6, 0.6)
-        reach = radius + rng.uniform(*NEIGHBOUR_GAP_MM) + 35.0
+    for neighbour, lift, turn in ((shapes.box((60.0, 40.0, 30.0), edge_mm=3.0, name="box"), 30.0, 0.0),
+                                  (shapes.cylinder(20.0, 50.0, edge_mm=3.0, name="cylinder"), 0.0, np.pi)):
+        way = first + turn + rng.uniform(-NEIGHBOUR_SPREAD_RAD, NEIGHBOUR_SPREAD_RAD)
+        reach = radius + rng.uniform(*NEIGHBOUR_GAP_MM) + NEIGHBOUR_RADIUS_MM
         spot = centre[:2] + reach * np.array([np.cos(way), np.sin(way)])
         pose = frames.rigid(frames.rot_z(rng.uniform(0.0, 360.0)), (*spot, lift))
-        objects.append(SceneObject(mesh_.name, mesh_, PLATFORM_POSE @ pose, "clutter"))
+        objects.append(SceneObject(neighbour.name, neighbour, PLATFORM_POSE @ pose, "clutter"))
     scene = Scene(objects, mesh, np.eye(4), seed=seed)
 
     azimuth, elevation = np.radians(rng.uniform(0.0, 360.0)), np.radians(rng.uniform(*ELEVATION_DEG))
@@ -64,7 +69,7 @@ def depth_camera_scan(mesh: Cloud, seed: int) -> DepthCameraScan:
     target = frames.apply(PLATFORM_POSE, centre[None])[0]
     position = target + distance * np.array([np.cos(elevation) * np.cos(azimuth),
                                              np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
-    side = int(2 * 1.3 * (radius + CROP_MARGIN_MM) / pixel) + 8
+    side = int(2 * IMAGE_MARGIN * (radius + CROP_MARGIN_MM) / pixel) + 8
     scanner = Scanner(position, target, pixel_pitch_mm=pixel, image_size=(side, side), noise_sigma_mm=noise,
                       z_resolution_mm=0.0, mixed_pixel_share=mixed, seed=int(rng.integers(2**31)))
     scan = scanner.scan(scene, cast_rays=False)  # rasterised on every stack: the same scans everywhere
