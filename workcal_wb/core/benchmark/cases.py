@@ -186,15 +186,21 @@ DEPTH_CAMERA_GROUP = "depth camera, part on a table"
 DEPTH_CAMERA_TOLERANCE_MM = 2.5
 
 
+def depth_camera_parts() -> dict:
+    """{name: closed mesh, z up} of the small parts a depth camera sees on its table."""
+    from ..simulate import shapes
+
+    return {"L-block": shapes.l_block(), "notched plate": shapes.plate(), "curved tile": shapes.shell()}
+
+
 def iter_depth_camera_groups(seed: int = 0, quick: bool = False):
     """Small parts on a table beside a box and a cylinder as a depth camera sees them
     (simulate.depth_camera: 1-2 mm of noise, coarse and mixed pixels, the table in the crop), one
     part's views a group, at a tolerance above that noise."""
-    from ..simulate import shapes
     from ..simulate.depth_camera import depth_camera_scan
 
-    for name, make in (("L-block", shapes.l_block), ("notched plate", shapes.plate), ("curved tile", shapes.shell)):
-        model, cases = make(), []
+    for name, model in depth_camera_parts().items():
+        cases = []
         for view in range(1 if quick else 3):
             scan = depth_camera_scan(model, seed * 1000 + 100 + view)
             cases.append(Case(f"{name} #{view} on a table", DEPTH_CAMERA_GROUP, scan.points, model, scan.U, exact=True,

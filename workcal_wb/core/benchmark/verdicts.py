@@ -27,7 +27,7 @@ from .. import frames, pointops
 from ..geometry import Cloud
 from ..result import SYMMETRIC
 from ..simulate.cell import bunny_reference_poses
-from .cases import BUNNY_SCANS, DEPTH_CAMERA_TOLERANCE_MM
+from .cases import BUNNY_SCANS, DEPTH_CAMERA_TOLERANCE_MM, depth_camera_parts
 from .costs import cost_lines
 
 DRAGON_FOLDER = Path(__file__).resolve().parents[3] / "tests" / "data" / "stanford-dragon-stand"
@@ -183,11 +183,9 @@ def simulated_cases(seed: int, views: int = VIEWS, wanted: tuple = ()) -> list[V
     return cases
 
 
-def depth_camera_parts(shared_bunny: Path | None) -> dict:
-    """{name: closed mesh, z up} of the parts the depth camera sees on its table."""
-    from ..simulate import shapes
-
-    parts = {"L-block": shapes.l_block(), "notched plate": shapes.plate(), "curved tile": shapes.shell()}
+def depth_camera_parts_and_bunny(shared_bunny: Path | None) -> dict:
+    """cases.depth_camera_parts and, when the Stanford data is there, the bunny standing on its base."""
+    parts = depth_camera_parts()
     if shared_bunny is not None and (shared_bunny / "bun_zipper.ply").is_file():
         from ..simulate.upright_l import workpiece
 
@@ -204,7 +202,7 @@ def depth_camera_cases(shared_bunny: Path | None, seed: int, views: int = DEPTH_
     from ..simulate.depth_camera import depth_camera_scan
 
     cases = []
-    for name, mesh in depth_camera_parts(shared_bunny).items():
+    for name, mesh in depth_camera_parts_and_bunny(shared_bunny).items():
         for view in range(views):
             label = f"depth camera {name} #{view}"
             if wanted and not label.startswith(tuple(wanted)):
