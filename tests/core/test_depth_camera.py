@@ -1,6 +1,7 @@
 """Small parts on a table as a depth camera sees them (simulate.depth_camera): the table and the
 neighbours in the crop, millimetres of noise, mixed pixels at the depth edges."""
 import numpy as np
+import open3d
 import pytest
 
 from workcal_wb.core import frames
@@ -75,8 +76,9 @@ def test_a_thin_plate_whose_sides_lie_in_the_tables_band_is_never_ok_turned():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="open defect: the search never proposes the right pose and the 90 deg turn "
-                                       "fits within the noise (docs/studies.md, the table beside a part)")
+@pytest.mark.xfail(open3d.__version__.startswith("0.16."), strict=True,
+                   reason="open defect on Debian 12's stack (open3d 0.16, numpy 1.24): the search never proposes the "
+                          "right pose and the 90 deg turn fits within the noise (docs/studies.md, the table beside a part)")
 def test_an_l_block_seen_low_through_coarse_pixels_is_never_ok_turned():
     mesh = shapes.l_block()
     scan = depth_camera_scan(mesh, 202)
