@@ -401,7 +401,7 @@ def test_the_scan_is_drawn_shaded_by_its_surfaces_not_flat_grey(doc, tmp_path, g
     pump(0.3)
     settle()
     scan = get_setup(doc)["scan"]
-    assert scan_shading.wait(scan, 60), "the scan was not shaded within a minute"  # worked out in a worker
+    assert scan_shading.wait(scan, 60), "the scan was not shaded within a minute"
     colours = scan_shading.shown_colours(scan)  # read back from the scene graph
     assert colours is not None and len(colours) == scan.PointCount
     brightness = colours.mean(axis=1)

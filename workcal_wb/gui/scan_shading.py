@@ -4,9 +4,8 @@ relief show.  Display only: nothing is stored in the document.
 
 The shaded copy is a ``SoSwitch`` named "WorkCalShading" in the scan's view-provider root, drawn over
 FreeCAD's own points at the same depth (``SoDepthBuffer`` LEQUAL) and under the region overlay
-(``region_display``), which comes after it in the root.  The brightness is worked out once per cloud,
-in a worker thread (normals of a million points take seconds; the scan stays drawn flat meanwhile), and
-kept on the view provider's proxy.
+(``region_display``), which comes after it in the root.  The brightness is worked out once per cloud
+(on the main thread: normals of a million points take seconds) and kept on the view provider's proxy.
 """
 from __future__ import annotations
 
@@ -46,17 +45,12 @@ def _node(root, create: bool, before: str | None = None):
     return switch
 
 
-# How often the main thread looks whether a worker has finished (ms).
-POLL_MS = 100
-_running = {}  # (document name, object name) -> (the cloud's key, the worker's future)
-
-
 def _cloud_key(obj) -> tuple:
     return (getattr(obj, "PointCount", 0), str(obj.Points.BoundBox), str(obj.Placement))
 
 
 def brightness_of(points: np.ndarray, normals) -> np.ndarray:
-    """The brightness of each point of a scan (thread-safe: numpy and open3d only)."""
+    """The brightness of each point of a scan."""
     from workcal_wb.core.pointops import shading
 
     distance = float(np.linalg.norm(np.median(points, axis=0))) or 1.0
@@ -64,21 +58,9 @@ def brightness_of(points: np.ndarray, normals) -> np.ndarray:
     return shading(points, light, normals)
 
 
-def _executor():
-    from concurrent.futures import ThreadPoolExecutor
-
-    global _EXECUTOR
-    if _EXECUTOR is None:
-        _EXECUTOR = ThreadPoolExecutor(max_workers=1, thread_name_prefix="WorkCalShading")
-    return _EXECUTOR
-
-
-_EXECUTOR = None
-
-
 def update(obj) -> bool:
-    """Draw the scan ``obj`` shaded: at once when its brightness is known, else once a worker has worked
-    it out (the scan stays flat meanwhile).  Whether it is drawn shaded now."""
+    """Draw the scan ``obj`` shaded, its brightness worked out once per cloud on the main thread (a
+    worker's result could arrive for an object whose document has closed); whether it is drawn shaded."""
     from workcal_wb.fc import scan as fc_scan
 
     vobj = getattr(obj, "ViewObject", None)
@@ -86,44 +68,14 @@ def update(obj) -> bool:
         return False
     key = _cloud_key(obj)
     cached = getattr(vobj.Proxy, "_shading", None)
-    if cached is not None and cached[0] == key:
-        return _draw(obj, cached[1])
-    job = (obj.Document.Name, obj.Name)
-    if job in _running and _running[job][0] == key:
-        return False
-    try:
-        cloud = fc_scan.scan_cloud(obj)
-    except WorkCalError:
-        return False
-    _running[job] = (key, _executor().submit(brightness_of, cloud.points, cloud.normals))
-    _poll(job)
-    return False
-
-
-def _poll(job) -> None:
-    """Draw the worker's brightness once it is there (on the main thread: Coin is not thread-safe)."""
-    import FreeCAD
-    from PySide import QtCore
-
-    key, future = _running.get(job, (None, None))
-    if future is None:
-        return
-    if not future.done():
-        QtCore.QTimer.singleShot(POLL_MS, lambda: _poll(job))
-        return
-    del _running[job]
-    doc = FreeCAD.listDocuments().get(job[0])
-    obj = doc.getObject(job[1]) if doc is not None else None
-    vobj = getattr(obj, "ViewObject", None)
-    if vobj is None or future.exception() is not None:
-        if future.exception() is not None:
-            FreeCAD.Console.PrintWarning(f"WorkCal: the scan is drawn flat: {future.exception()}\n")
-        return
-    vobj.Proxy._shading = (key, future.result())
-    if _cloud_key(obj) == key:
-        _draw(obj, future.result())
-    else:  # the points changed while the worker ran
-        update(obj)
+    if cached is None or cached[0] != key:
+        try:
+            cloud = fc_scan.scan_cloud(obj)
+            cached = (key, brightness_of(cloud.points, cloud.normals))
+        except WorkCalError:
+            return False
+        vobj.Proxy._shading = cached
+    return _draw(obj, cached[1])
 
 
 def wait(obj, timeout_s: float = 60.0) -> bool:
@@ -134,7 +86,7 @@ def wait(obj, timeout_s: float = 60.0) -> bool:
 
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
-        if shown(obj) and not any(job[1] == obj.Name for job in _running):
+        if shown(obj):
             return True
         process_events(0.05)
     return shown(obj)
