@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import (UNITS, add_cache_options, finite, input_file, is_cad_file, keep_models,
+from workcal_wb.cli.arguments import (UNITS, add_cache_options, count, finite, input_file, is_cad_file, keep_models,
                                       model_cache, positive, read_cad_model, seed)
 from workcal_wb.cli.toolpath import add_machine_options, forced_warnings, read_options, robot_options, way_out
+from workcal_wb.core import choice
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.files import read_text
@@ -60,6 +61,10 @@ def add_parser(subparsers):
                         "'comment viewpoint X Y Z', else estimated)")
     p.add_argument("--up", type=finite, nargs=3, metavar=("X", "Y", "Z"),
                    help="the platform's up direction in the scan's coordinates (default: from the data, any frame)")
+    p.add_argument("--choose", type=count, metavar="N",
+                   help="when the calibration is ambiguous, use its pose N (1: the best) as a run without --choose "
+                        "lists them; result.json records who chose which among the poses, and the status becomes "
+                        "'ok (chosen)'")
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
     add_machine_options(p)
@@ -136,6 +141,7 @@ def run(args) -> int:
                                      scanner_origin=args.scanner_origin, up=args.up)
         result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
                            toolpath_points=None if toolpath is None else path_points(toolpath)[0])
+        result = _chosen(result, args.choose, {"workpiece": workpiece, "reference": reference})
 
         # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
@@ -157,6 +163,28 @@ def run(args) -> int:
         print(f"workcal calibrate: warning: {line}", file=sys.stderr)
     keep_models(cache)
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
+
+
+def _chosen(result, number, models: dict):
+    """The result with pose ``number`` (1: the best) chosen when it is ambiguous; the poses in words
+    on stderr when it is and none was chosen."""
+    role = choice.chosen_role(result)
+    if role is None:
+        if number is not None:
+            print(f"workcal calibrate: warning: --choose {number} not used: the calibration is {result.status!r}, "
+                  "not ambiguous", file=sys.stderr)
+        return result
+    axes = choice.part_axes(models[role].points)
+    poses = choice.poses(result, role)
+    if number is None:
+        print(f"workcal calibrate: the {role} match left {len(poses)} poses the scan cannot tell apart "
+              "(choose one with --choose N):", file=sys.stderr)
+        for i, pose in enumerate(poses, 1):
+            print(f"  pose {i}: {choice.difference(poses[0].matrix, pose.matrix, axes).words}", file=sys.stderr)
+        return result
+    if number > len(poses):
+        raise InputError(f"--choose {number}: the {role} match has {len(poses)} poses (1 to {len(poses)})")
+    return choice.choose(result, role, number - 1, axes, choice.user_name())
 
 
 def _program(args, toolpath, result, outputs, workpiece) -> tuple:

@@ -30,7 +30,7 @@ from . import frames, picture
 from .atomic import atomic_write_text
 from .deviation import BEYOND_ADDED, BEYOND_REMOVED, NO_SURFACE, DeviationScale, deviation_stats, signed_deviations
 from .errors import OutputError
-from .result import AMBIGUOUS, FAILED, OFF_MODEL_KEYS, OK, CalibrationResult
+from .result import AMBIGUOUS, CHOSEN, FAILED, OFF_MODEL_KEYS, OK, CalibrationResult, choice_words
 
 REPORT_FORMAT = "workcal-report"
 HTML_NAME, JSON_NAME = "report.html", "report.json"
@@ -54,6 +54,7 @@ STATUS_TEXT = {
     AMBIGUOUS: ("AMBIGUOUS", "W is not sure: the part is symmetric, another pose fits almost as well, or the scan "
                              "leaves part of the view unexplained (see the reasons). Check before use."),
     FAILED: ("FAILED", "Do not use W: the calibration failed its checks."),
+    CHOSEN: ("OK (CHOSEN)", "W can be used: the scan could not tell several poses apart and a person chose one."),
 }
 
 CSS = """
@@ -559,6 +560,8 @@ def _pose_html(name: str, meaning: str, T) -> str:
 def _banner(calibration: CalibrationResult) -> str:
     label, text = STATUS_TEXT[calibration.status]
     reasons = "".join(f"<li>{_e(r)}</li>" for r in calibration.reasons)
+    if calibration.choice is not None:
+        reasons += f"<li>{_e(choice_words(calibration.choice))}</li>"
     return (f'<div class="banner {calibration.status}" id="status"><b>{label}</b> &nbsp; {_e(text)}'
             + (f"<ul>{reasons}</ul>" if reasons else "") + "</div>")
 

@@ -27,9 +27,13 @@ from .errors import InputError
 from .files import read_bytes
 
 OK, AMBIGUOUS, FAILED = "ok", "ambiguous", "failed"
-STATUSES = (OK, AMBIGUOUS, FAILED)
-# Version 2: region indices in a side file; 3: each reason a code with its sentence.
-CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 3
+# An ambiguous calibration whose pose a person chose among those the scan could not tell apart: usable
+# as "ok" is, and only with the record of that choice (Choice).
+CHOSEN = "ok (chosen)"
+STATUSES = (OK, AMBIGUOUS, FAILED, CHOSEN)
+USABLE = (OK, CHOSEN)  # the statuses whose W may be used without forcing
+# Version 2: region indices in a side file; 3: each reason a code with its sentence; 4: a person's choice.
+CALIBRATION_FORMAT, CALIBRATION_VERSION = "workcal-calibration", 4
 REGION_ROLES = ("workpiece", "reference", "platform")  # the regions that are scan point indices
 # Per matched region, the scan indices of its points off its placed model, kept as the regions are;
 # regions["off_model"] says of each how many there are, where they lie and what to change.
@@ -185,6 +189,53 @@ class Candidate:
         if values.get("ruled_out_by") is not None and not _is(values["ruled_out_by"], _TEXT):
             raise InputError(f"{source}: ruled_out_by must be a string or null")
         values.pop("evidence", None)
+        try:
+            return cls(**values)
+        except (TypeError, ValueError, InputError) as exc:
+            raise InputError(f"{source}: {exc}") from None
+
+
+@dataclass
+class Choice:
+    """A person's choice of one pose among those an ambiguous calibration could not tell apart: who
+    (the OS user name) and when (ISO 8601), which match (``role``) and which of its ``count`` poses
+    (``index``, 0 the best), that pose (``matrix``, U or V) and the best it replaced (``best``), and
+    the evidence shown for each pose ({"index", "difference" in words, and the match's "score",
+    "score_ratio", "standard_errors_below_best" or the "symmetry" that gives it})."""
+
+    who: str
+    when: str
+    role: str
+    index: int
+    count: int
+    matrix: np.ndarray
+    best: np.ndarray
+    evidence: list = field(default_factory=list)
+
+    def __post_init__(self):
+        self.matrix, self.best = frames.as_transform(self.matrix, "chosen pose"), frames.as_transform(self.best, "best pose")
+        if self.role not in ("workpiece", "reference") or not 0 <= self.index < self.count:
+            raise ValueError(f"a choice names the workpiece or reference match and one of its poses, not "
+                             f"{self.role!r} pose {self.index} of {self.count}")
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Choice) and json.dumps(self.to_dict()) == json.dumps(other.to_dict())
+
+    @property
+    def difference(self) -> str:
+        """How the chosen pose differs from the best, in words (as shown when it was chosen)."""
+        return next((e.get("difference", "") for e in self.evidence if e.get("index") == self.index), "")
+
+    def to_dict(self) -> dict:
+        return _jsonable({f.name: getattr(self, f.name) for f in fields(self)})
+
+    @classmethod
+    def from_dict(cls, data, source: str) -> "Choice":
+        values = _checked_fields(cls, data, source)
+        missing = [f.name for f in fields(cls) if f.name not in values and f.name != "evidence"]
+        if missing:
+            raise InputError(f"{source}: the choice has no {missing[0]}")
+        _check_items(values.get("evidence", []), (dict,), source, "choice evidence")
         try:
             return cls(**values)
         except (TypeError, ValueError, InputError) as exc:
@@ -368,10 +419,16 @@ class CalibrationResult:
     reasons: list = field(default_factory=list)  # Reasons
     time_s: float = 0.0
     seed: int = 0
+    choice: Choice | None = None  # the pose a person chose, when the status is CHOSEN
 
     def __post_init__(self):
         if self.status not in STATUSES:
             raise ValueError(f"calibration status must be one of {STATUSES}, not {self.status!r}")
+        if isinstance(self.choice, dict):
+            self.choice = Choice.from_dict(self.choice, "calibration")
+        if (self.status == CHOSEN) != (self.choice is not None):
+            raise ValueError(f"calibration status {CHOSEN!r} needs the record of who chose the pose, and only it has "
+                             f"one (status {self.status!r}, {'a' if self.choice else 'no'} choice recorded)")
         self.reasons = [Reason.from_value(r, "calibration", "reasons") for r in self.reasons]
         self.W, self.U, self.V = (_matrix(m, n) for m, n in ((self.W, "W"), (self.U, "U"), (self.V, "V")))
         if isinstance(self.workpiece, dict):
@@ -383,7 +440,8 @@ class CalibrationResult:
 
     @property
     def ok(self) -> bool:
-        return self.status == OK
+        """W may be used: "ok", or "ok (chosen)" by a person among poses the scan could not tell apart."""
+        return self.status in USABLE
 
     def off_model(self, role: str) -> dict | None:
         """What the result says of the ``role`` region's points off its placed model: "count", "where"
@@ -397,6 +455,8 @@ class CalibrationResult:
         """W, its angles, both matches and the uncertainty in a few lines (terminal, Report view)."""
         lines = [f"calibration {self.status.upper()} in {self.time_s:.2f} s"]
         lines += [f"  reason: {r}" for r in self.reasons]
+        if self.choice is not None:
+            lines.append(f"  {choice_words(self.choice)}")
         if self.W is not None:
             phi, theta, psi = frames.euler_zyz(self.W)
             lines.append("W = ^B X (workpiece frame in the robot base frame, mm):")
@@ -425,7 +485,7 @@ class CalibrationResult:
         out = {"format": CALIBRATION_FORMAT, "version": CALIBRATION_VERSION, "units": {"length": "mm", "angle": "deg"}}
         for f in fields(self):
             value = getattr(self, f.name)
-            out[f.name] = value.to_dict() if isinstance(value, MatchResult) else _jsonable(value)
+            out[f.name] = value.to_dict() if isinstance(value, (MatchResult, Choice)) else _jsonable(value)
         out["reasons"] = [r.to_dict() for r in self.reasons]
         roles = {k: v for k, v in self.regions.items() if k in INDEX_KEYS and v is not None}
         out["regions"] = {k: v for k, v in out["regions"].items() if k not in _REGION_FILE_KEYS + INDEX_KEYS}
@@ -464,6 +524,8 @@ class CalibrationResult:
                 raise InputError(f"{source}: {role} must be a match (an object) or null, found {_json_kind(values[role])}")
             if values.get(role) is not None:
                 values[role] = MatchResult.from_dict(values[role], f"{source}: {role} match")
+        if values.get("choice") is not None:
+            values["choice"] = Choice.from_dict(values["choice"], f"{source}: choice")
         scan_points = values.get("inputs", {}).get("scan_points")
         values["regions"] = _read_regions(values.get("regions", {}), source, regions_folder,
                                           scan_points if _is(scan_points, (int,)) else None)
@@ -508,6 +570,12 @@ class CalibrationResult:
         except (ValueError, RecursionError) as exc:  # JSONDecodeError, bad UTF-8, absurd nesting
             raise InputError(f"{source}: not valid JSON ({exc})") from None
         return cls.from_dict(data, source, regions_folder)
+
+
+def choice_words(choice: Choice) -> str:
+    """The choice in one sentence (the summary, the programs' headers)."""
+    return (f"pose chosen by the user {choice.who} on {choice.when} among {choice.count} candidate poses of the "
+            f"{choice.role} match: pose {choice.index + 1}, {choice.difference or 'the best'}")
 
 
 def result_fingerprint(result: CalibrationResult) -> str:

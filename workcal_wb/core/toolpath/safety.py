@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from .. import frames
 from ..errors import InputError, WorkCalError
 from ..pointops import sample_triangles
-from ..result import OK, CalibrationResult
+from ..result import CHOSEN, CalibrationResult
 from ..surface import SurfaceModel
 from . import orientation
 from .model import CODE, RAPID, RotaryTable, Toolpath
@@ -273,10 +273,12 @@ def check_calibration(calibration: CalibrationResult, force: bool, source: str =
     if calibration.W is None:
         raise InputError(f"{source}: calibration has no transform W (status {calibration.status!r}); nothing to export")
     failed = [g for g in calibration.quality_gates if g.get("passed") is False]
-    if calibration.status == OK and failed:
-        raise InputError(f"{source}: status 'ok' while its {gate_text(failed[0])} failed: the file contradicts "
-                         "itself (edited, or not written by WorkCal); calibrate again")
-    if calibration.status == OK:
+    if calibration.status == CHOSEN:  # a person chose among the poses: only the match status gates stay failed
+        failed = [g for g in failed if g.get("unit")]
+    if calibration.ok and failed:
+        raise InputError(f"{source}: status {calibration.status!r} while its {gate_text(failed[0])} failed: the file "
+                         "contradicts itself (edited, or not written by WorkCal); calibrate again")
+    if calibration.ok:
         return False
     if not force:
         raise CalibrationNotOk(

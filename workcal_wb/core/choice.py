@@ -1,0 +1,198 @@
+"""Choosing one pose of an ambiguous calibration, as a person looking at them does.
+
+``poses(result, role)`` lists the poses of a match the scan could not tell apart (the best, the rivals
+the match found, the turns the model's symmetries give), ``difference`` says in words how one differs
+from the best (a turn about one of the part's axes, a shift along one, in mm and degrees), and
+``choose`` gives the result with that pose as U (or V), W = V^-1 U again, the status "ok (chosen)" and
+the record of the choice (``result.Choice``).
+"""
+from __future__ import annotations
+
+import getpass
+from dataclasses import dataclass, replace
+from datetime import datetime, timezone
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from . import frames
+from .errors import InputError
+from .result import AMBIGUOUS, CHOSEN, Candidate, CalibrationResult, Choice
+from .symmetry import turn
+
+ROLES = ("workpiece", "reference")
+PRINCIPAL_NAMES = ("long", "middle", "short")
+FRAME_NAMES = ("X", "Y", "Z")
+# A direction within this angle of one of the part's axes is said to be along it; else given as a vector.
+ALONG_AXIS_DEG = 10.0
+# Principal axes whose spreads differ by less than this fraction (a round or square part) are not told
+# apart by name: the frame's axis is named instead.
+DISTINCT_SPREAD = 0.1
+# Turns and shifts below these are left unsaid: far below what tells two poses apart on a scan.
+SAID_TURN_DEG, SAID_SHIFT_MM = 0.05, 0.01
+# A turn of the model, shown for a symmetry of any angle (order 0): a quarter turn shows it.
+ANY_ANGLE_TURN_DEG = 90.0
+
+
+@dataclass(frozen=True)
+class PartAxes:
+    """The model's centre and principal axes (columns, long first, each signed to its largest
+    component positive), in the model's frame X, and which of them are told apart by their spread."""
+
+    centre: np.ndarray
+    axes: np.ndarray
+    distinct: tuple
+
+
+def part_axes(points) -> PartAxes:
+    """The principal axes of the model's points (mm, frame X) and its centre: the middle of its extent
+    along them (where its points lie thickest does not move it)."""
+    points = np.asarray(points, dtype=float)
+    mean = points.mean(axis=0)
+    values, vectors = np.linalg.eigh(np.cov((points - mean).T))
+    order = np.argsort(values)[::-1]
+    spread, axes = np.sqrt(np.maximum(values[order], 0.0)), vectors[:, order]
+    axes = axes * np.sign(axes[np.argmax(np.abs(axes), axis=0), range(3)])
+    apart = [abs(spread[i] - spread[j]) > DISTINCT_SPREAD * max(spread[i], spread[j], 1e-12)
+             for i, j in ((0, 1), (0, 2), (1, 2))]
+    distinct = (apart[0] and apart[1], apart[0] and apart[2], apart[1] and apart[2])
+    along = (points - mean) @ axes
+    centre = mean + axes @ ((along.max(axis=0) + along.min(axis=0)) / 2)
+    return PartAxes(centre, axes, distinct)
+
+
+@dataclass(frozen=True)
+class Difference:
+    """How a pose differs from the best, in the model's frame X: the turn (degrees about a unit axis)
+    about the part's centre, then the centre's shift (mm), and both in words."""
+
+    angle_deg: float
+    axis: np.ndarray
+    shift_mm: np.ndarray
+    words: str
+
+
+def _number(value: float) -> str:
+    return f"{value:.1f}".rstrip("0").rstrip(".").replace("-0", "0") if abs(value) >= 0.05 else "0"
+
+
+def _along(direction, axes: PartAxes) -> tuple[str, float]:
+    """(the name of the part's axis ``direction`` lies along, the sign it has along it), or (its
+    components in the part's frame, 1) when it lies along none."""
+    direction = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    near = np.cos(np.radians(ALONG_AXIS_DEG))
+    frame = int(np.argmax(np.abs(direction)))
+    frame_name = FRAME_NAMES[frame] if abs(direction[frame]) >= near else ""
+    principal = int(np.argmax(np.abs(axes.axes.T @ direction)))
+    along = axes.axes[:, principal] @ direction
+    if axes.distinct[principal] and abs(along) >= near:
+        aligned = abs(axes.axes[frame, principal]) >= near and frame_name
+        return f"the part's {PRINCIPAL_NAMES[principal]} axis" + (f" ({frame_name})" if aligned else ""), np.sign(along)
+    if frame_name:
+        return f"the part's {frame_name} axis", np.sign(direction[frame])
+    return "({}) in the part's frame".format(", ".join(f"{v:.2f}" for v in direction)), 1.0
+
+
+def difference(best, other, axes: PartAxes) -> Difference:
+    """How the pose ``other`` (model -> scan) differs from ``best``: the motion best^-1 other of the
+    model in its own frame, as a turn about the part's centre and a shift of that centre."""
+    D = frames.invert(best) @ other
+    rotvec = Rotation.from_matrix(D[:3, :3]).as_rotvec()
+    angle = float(np.degrees(np.linalg.norm(rotvec)))
+    axis = rotvec / np.linalg.norm(rotvec) if angle > 0 else np.array([0.0, 0.0, 1.0])
+    shift = frames.apply(D, axes.centre[None])[0] - axes.centre
+    words = []
+    if angle >= SAID_TURN_DEG:
+        name, sign = _along(axis, axes)
+        signed = angle if angle > 180.0 - SAID_TURN_DEG else sign * angle
+        words.append(f"turned {_number(signed)} deg about {name}")
+    distance = float(np.linalg.norm(shift))
+    if distance >= SAID_SHIFT_MM:
+        name, sign = _along(shift, axes)
+        words.append(f"shifted {_number(sign * distance)} mm along {name}")
+    return Difference(angle, axis, shift, ", ".join(words) or "the same pose")
+
+
+@dataclass(frozen=True)
+class Pose:
+    """One pose of a match (model -> scan), with what the match weighed of it (``candidate``) or the
+    model symmetry that gives it (``symmetry``); the best has the match's first candidate, if any."""
+
+    matrix: np.ndarray
+    candidate: Candidate | None = None
+    symmetry: dict | None = None
+
+
+def _match(result: CalibrationResult, role: str):
+    return result.workpiece if role == "workpiece" else result.reference
+
+
+def poses(result: CalibrationResult, role: str) -> list[Pose]:
+    """The poses of ``role``'s model the calibration could not tell apart, best first: the pose the
+    calibration found (kept first after a choice), the rivals its match found and the turns the
+    model's symmetries give."""
+    if result.choice is not None and result.choice.role == role:
+        best = result.choice.best
+    else:
+        best = result.U if role == "workpiece" else result.V
+    if best is None:
+        return []
+    match = _match(result, role)
+    found = list(getattr(match, "candidates", None) or [])
+    out = [Pose(best, found[0] if found else None)] + [Pose(c.matrix, c) for c in found[1:]]
+    for symmetry in getattr(match, "symmetries", None) or []:
+        angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else ANY_ANGLE_TURN_DEG
+        out.append(Pose(best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry=symmetry))
+    return out
+
+
+def chosen_role(result: CalibrationResult) -> str | None:
+    """The match a person may choose a pose of: the one with several poses, when the result is
+    ambiguous (or was chosen); None otherwise."""
+    if result.choice is not None:
+        return result.choice.role
+    if result.status != AMBIGUOUS:
+        return None
+    return next((role for role in ROLES if len(poses(result, role)) > 1), None)
+
+
+def evidence(pose: Pose, index: int, named: Difference) -> dict:
+    """What was shown of a pose when choosing: its difference from the best and the match's numbers."""
+    out = {"index": index, "difference": named.words}
+    if pose.candidate is not None:
+        out.update({key: getattr(pose.candidate, key) for key in ("score", "score_ratio",
+                                                                 "standard_errors_below_best")})
+    if pose.symmetry is not None:
+        out["symmetry"] = pose.symmetry.get("description", "")
+    return out
+
+
+def user_name() -> str:
+    """The OS user's name, who a choice is recorded as made by ("unknown" where the OS has none)."""
+    try:
+        return getpass.getuser()
+    except (OSError, KeyError, ImportError):  # no login name, no passwd entry (containers)
+        return "unknown"
+
+
+def choose(result: CalibrationResult, role: str, index: int, axes: PartAxes, who: str,
+           when: str | None = None) -> CalibrationResult:
+    """The ambiguous ``result`` with pose ``index`` of ``role``'s match chosen by ``who`` (the OS user
+    name) at ``when`` (ISO 8601; default now): that pose as U (or V), W = V^-1 U, status "ok (chosen)"
+    and the record.  ``axes``: the ``role`` model's (part_axes), to name each pose's difference."""
+    if result.status != AMBIGUOUS or chosen_role(result) != role:
+        raise InputError(f"only an ambiguous calibration's poses can be chosen, and of the match in doubt; this one "
+                         f"is {result.status!r}" + ("" if result.status != AMBIGUOUS else f", its {role} match has "
+                                                                                         "no other pose"))
+    found = poses(result, role)
+    if not 0 <= index < len(found):
+        raise InputError(f"the {role} match has {len(found)} poses (0 to {len(found) - 1}), no pose {index}")
+    best, chosen = found[0].matrix, found[index].matrix
+    shown = [evidence(p, i, difference(best, p.matrix, axes)) for i, p in enumerate(found)]
+    record = Choice(str(who), when or datetime.now(timezone.utc).isoformat(timespec="seconds"), role, index,
+                    len(found), chosen, best, shown)
+    U, V = (chosen, result.V) if role == "workpiece" else (result.U, chosen)
+    warnings = list(result.warnings)
+    if index:
+        warnings.append("the uncertainty was estimated at the pose found best, not at the chosen one")
+    return replace(result, status=CHOSEN, U=U, V=V, W=frames.invert(V) @ U, choice=record, warnings=warnings)
