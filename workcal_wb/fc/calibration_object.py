@@ -28,7 +28,9 @@ from workcal_wb.core import frames
 from workcal_wb.core.calibration import CalibrationOptions
 from workcal_wb.core.errors import InputError, WorkCalError
 from workcal_wb.core.match import METHODS
-from workcal_wb.core.result import ERROR, FAILED, OK, CalibrationResult, Reason
+from workcal_wb.core import choice
+from workcal_wb.core.result import (AMBIGUOUS, CHOSEN, ERROR, FAILED, OK, USABLE, CalibrationResult, Reason,
+                                    choice_words)
 from workcal_wb.fc import inputs as fc_inputs
 from workcal_wb.fc import placed_model, prefs
 from workcal_wb.fc.lookups import CALIBRATION_TYPE, is_calibration, label, result_of
@@ -43,7 +45,9 @@ translate = FreeCAD.Qt.translate
 QT_TRANSLATE_NOOP = FreeCAD.Qt.QT_TRANSLATE_NOOP
 
 TYPE = CALIBRATION_TYPE
-STATUSES = ["new", "ok", "ambiguous", "failed", "error"]  # error: the inputs could not be calibrated at all
+# error: the inputs could not be calibrated at all; "ok (chosen)": a person chose among the poses an ambiguous
+# result left (result.CHOSEN), last so that files saved before it keep their values' places.
+STATUSES = ["new", OK, AMBIGUOUS, FAILED, "error", CHOSEN]
 FRAME_FRACTION = 0.35  # triad axis length as a fraction of the workpiece model's diagonal
 DEFAULT_FRAME_MM = 50.0
 
@@ -93,8 +97,9 @@ OPTION_PROPERTIES = [
 # (about ten characters: tests/gui/test_calibrate_flow.py measures them).
 RESULT_PROPERTIES = [
     ("App::PropertyEnumeration", "Status", "Result", QT_TRANSLATE_NOOP(
-        "App::Property", "ok: W can be used; ambiguous: another pose fits almost as well; failed: W must not be "
-                         "used (see Reasons); error: the inputs could not be calibrated")),
+        "App::Property", "ok: W can be used; ambiguous: another pose fits almost as well; ok (chosen): a person "
+                         "chose one of those poses; failed: W must not be used (see Reasons); error: the inputs "
+                         "could not be calibrated")),
     ("App::PropertyPlacement", "W", "Result", QT_TRANSLATE_NOOP(
         "App::Property", "Where the workpiece is in the robot base frame: W = ^B X = V^-1 U, the workpiece frame X "
                          "in the robot base frame B")),
@@ -214,7 +219,7 @@ def store_result(obj, result: CalibrationResult, key: str = "") -> None:
 
 def report(result: CalibrationResult, label: str = "Calibration") -> None:
     """The summary in the Report view: a message when ok, a warning otherwise."""
-    (FreeCAD.Console.PrintMessage if result.status == OK else FreeCAD.Console.PrintWarning)(
+    (FreeCAD.Console.PrintMessage if result.ok else FreeCAD.Console.PrintWarning)(
         f"WorkCal: {label}: {result.summary()}\n")
 
 
@@ -297,6 +302,10 @@ class CalibrationFeature(Feature):
         if not obj.getEnumerationsOfProperty("Status"):
             obj.Status = STATUSES
             obj.Status = "new"
+        elif obj.getEnumerationsOfProperty("Status") != STATUSES:  # saved before a status was added
+            status = obj.Status
+            obj.Status = STATUSES
+            obj.Status = status
         if obj.Tolerance.Value == 0:
             obj.Tolerance = prefs.get("ToleranceMm")
         if obj.Refits == 0:
@@ -407,12 +416,35 @@ def update_calibration(obj, *, tolerance_mm=None, method=None, seed=None, resamp
     return result
 
 
-def accept(obj) -> None:
-    """Record that someone checked the result and accepts W (one undo step).  Only an "ok" calibration
-    can be accepted: an ambiguous or failed one is calibrated again or forced at export."""
+def choose_pose(obj, index: int, who: str | None = None) -> CalibrationResult:
+    """Record that ``who`` (default: the OS user) chose pose ``index`` (0: the best) of an ambiguous
+    calibration's match in doubt, as its poses are listed (``placed_model.candidate_poses``): W from that
+    pose, the status "ok (chosen)", the models on the scan shown at it; one undo step.  Returns the
+    result.  InputError (the object unchanged) when the calibration is not ambiguous or has no such pose."""
     if not is_calibration(obj):
         raise InputError(f"{label(obj)}: not a WorkCal calibration")
-    if obj.Status != OK:
+    result = result_of(obj)
+    role = choice.chosen_role(result)
+    if role is None or result.choice is not None:
+        raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ambiguous calibration's poses can be "
+                         "chosen (calibrate again to choose anew)")
+    source = obj.Workpiece if role == "workpiece" else obj.Reference
+    axes = choice.part_axes(model_cloud(source, role=role).points)
+    chosen = choice.choose(result, role, int(index), axes, who or choice.user_name())
+    with transaction(obj.Document, translate("WorkCal", "Choose the pose")):
+        store_result(obj, chosen, obj.InputsKey)
+        placed_model.show_chosen(obj)
+        obj.Document.recompute()
+    FreeCAD.Console.PrintMessage(f"WorkCal: {obj.Label}: {choice_words(chosen.choice)}\n")
+    return chosen
+
+
+def accept(obj) -> None:
+    """Record that someone checked the result and accepts W (one undo step).  Only an "ok" calibration
+    (or "ok (chosen)") can be accepted: an ambiguous or failed one is calibrated again or forced at export."""
+    if not is_calibration(obj):
+        raise InputError(f"{label(obj)}: not a WorkCal calibration")
+    if obj.Status not in USABLE:
         raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ok calibration can be accepted "
                          "(calibrate again, or force the export)")
     with transaction(obj.Document, translate("WorkCal", "Accept the calibration")):

@@ -19,7 +19,7 @@ import numpy as np
 
 import FreeCAD
 
-from workcal_wb.core import frames
+from workcal_wb.core import choice, frames
 from workcal_wb.core.errors import InputError
 from workcal_wb.fc import models
 from workcal_wb.fc.lookups import result_of
@@ -55,22 +55,10 @@ PROPERTIES = [
 
 def candidates(calibration, role: str) -> list:
     """The poses of ``role``'s model the calibration's match could not tell apart, best first, as
-    (4x4 model -> scan transform, the model symmetry that gives it or None): the calibration's own U
-    or V, the rival poses the match found, and the poses the model's symmetries give."""
-    from workcal_wb.core.symmetry import turn
-
-    result = result_of(calibration)
-    match = result.workpiece if role == "workpiece" else result.reference
-    best = result.U if role == "workpiece" else result.V
-    if best is None:
-        return []
-    found = [(best, None)]
-    for candidate in (getattr(match, "candidates", None) or [])[1:]:
-        found.append((candidate.matrix, None))
-    for symmetry in getattr(match, "symmetries", None) or []:
-        angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else 90.0  # 0: any angle, a quarter shows it
-        found.append((best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry))
-    return found
+    (4x4 model -> scan transform, the model symmetry that gives it or None): the pose the calibration
+    found (first also after a person chose another), the rival poses the match found, and the poses the
+    model's symmetries give (``core.choice.poses``)."""
+    return [(p.matrix, p.symmetry) for p in choice.poses(result_of(calibration), role)]
 
 
 def candidate_poses(calibration, role: str) -> list:
@@ -89,10 +77,10 @@ def pose(calibration, role: str, frame: str, candidate: int = 0) -> np.ndarray:
         return poses[candidate]
     if role != "workpiece":
         raise InputError("the reference model is in the robot base frame already")
-    V = result_of(calibration).V
-    if V is None:
+    result = result_of(calibration)
+    if result.V is None:
         raise InputError(f"{calibration.Label}: the reference match failed, there is no W")
-    return frames.invert(V) @ poses[candidate]
+    return result.W if candidate == 0 else frames.invert(result.V) @ poses[candidate]  # 0: W, also a chosen one
 
 
 class PlacedModel(Feature):
@@ -191,6 +179,16 @@ def show_candidate(calibration, candidate: int):
         obj.recompute()
         shown.append(obj)
     return shown
+
+
+def show_chosen(calibration) -> None:
+    """Place the models on the scan at the poses the calibration holds: the chosen one of the match a
+    person chose a pose of, the best of the other (no transaction: the caller's)."""
+    record = result_of(calibration).choice
+    for obj in (find(calibration, role, ON_SCAN) for role in ROLES):
+        if obj is not None:
+            obj.Candidate = record.index if record is not None and record.role == obj.Role else 0
+            obj.recompute()
 
 
 # Of the model's points, the share that moves most between two poses: where a scan tells them apart.
