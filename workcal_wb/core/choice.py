@@ -25,11 +25,12 @@ PRINCIPAL_NAMES = ("long", "middle", "short")
 FRAME_NAMES = ("X", "Y", "Z")
 # A direction within this angle of one of the part's axes is said to be along it; else given as a vector.
 ALONG_AXIS_DEG = 10.0
-# Principal axes whose spreads differ by less than this fraction (a round or square part) are not told
-# apart by name: the frame's axis is named instead.
-DISTINCT_SPREAD = 0.1
-# Turns and shifts below these are left unsaid: far below what tells two poses apart on a scan.
-SAID_TURN_DEG, SAID_SHIFT_MM = 0.05, 0.01
+# Principal axes along which the part's extents differ by less than this fraction (a round or square
+# part) are not told apart by name: the frame's axis is named instead.
+DISTINCT_EXTENT = 0.1
+# Turns and shifts below these are left unsaid: the words round them to 0, and they are far below what
+# tells two poses apart on a scan.
+SAID_TURN_DEG, SAID_SHIFT_MM = 0.05, 0.05
 # A turn of the model, shown for a symmetry of any angle (order 0): a quarter turn shows it.
 ANY_ANGLE_TURN_DEG = 90.0
 
@@ -37,7 +38,7 @@ ANY_ANGLE_TURN_DEG = 90.0
 @dataclass(frozen=True)
 class PartAxes:
     """The model's centre and principal axes (columns, long first, each signed to its largest
-    component positive), in the model's frame X, and which of them are told apart by their spread."""
+    component positive), in the model's frame X, and which of them are told apart by their extent."""
 
     centre: np.ndarray
     axes: np.ndarray
@@ -45,19 +46,20 @@ class PartAxes:
 
 
 def part_axes(points) -> PartAxes:
-    """The principal axes of the model's points (mm, frame X) and its centre: the middle of its extent
-    along them (where its points lie thickest does not move it)."""
+    """The principal axes of the model's points (mm, frame X), named long, middle and short by the
+    model's extent along them, and its centre: the middle of that extent (where its points lie thickest
+    does not move it)."""
     points = np.asarray(points, dtype=float)
     mean = points.mean(axis=0)
-    values, vectors = np.linalg.eigh(np.cov((points - mean).T))
-    order = np.argsort(values)[::-1]
-    spread, axes = np.sqrt(np.maximum(values[order], 0.0)), vectors[:, order]
+    _, vectors = np.linalg.eigh(np.cov((points - mean).T))
+    along = (points - mean) @ vectors
+    extent = along.max(axis=0) - along.min(axis=0)
+    centre = mean + vectors @ ((along.max(axis=0) + along.min(axis=0)) / 2)
+    order = np.argsort(extent)[::-1]
+    extent, axes = extent[order], vectors[:, order]
     axes = axes * np.sign(axes[np.argmax(np.abs(axes), axis=0), range(3)])
-    apart = [abs(spread[i] - spread[j]) > DISTINCT_SPREAD * max(spread[i], spread[j], 1e-12)
-             for i, j in ((0, 1), (0, 2), (1, 2))]
-    distinct = (apart[0] and apart[1], apart[0] and apart[2], apart[1] and apart[2])
-    along = (points - mean) @ axes
-    centre = mean + axes @ ((along.max(axis=0) + along.min(axis=0)) / 2)
+    apart = {(i, j): abs(extent[i] - extent[j]) > DISTINCT_EXTENT * extent[i] for i, j in ((0, 1), (0, 2), (1, 2))}
+    distinct = (apart[0, 1] and apart[0, 2], apart[0, 1] and apart[1, 2], apart[0, 2] and apart[1, 2])
     return PartAxes(centre, axes, distinct)
 
 

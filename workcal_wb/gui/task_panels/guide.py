@@ -17,6 +17,7 @@ import FreeCAD
 import workcal_wb
 from workcal_wb.fc import proxies
 from workcal_wb.fc.setup import get_setup
+from workcal_wb.gui import candidate_display
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
 from workcal_wb.gui.task_panels.common import close_dialog, show_panel
@@ -350,6 +351,7 @@ class GuidePanel:
         else:
             orientation = scene.orientation
         gui_view.look_at(view, scene.fit or scene.show, orientation)
+        candidate_display.draw(view, scene.poses)
         if self.labels is not None:
             boxes = [(text, where if not hasattr(where, "ViewObject") else gui_view.bounding_box([where]))
                      for text, where in scene.labels]
@@ -413,6 +415,9 @@ class GuidePanel:
         FreeCAD.removeDocumentObserver(self.watcher)
         if self.labels is not None:
             self.labels.remove()
+        view = self.view()
+        if view is not None:
+            candidate_display.clear(view)
         close_dialog()
         if GuidePanel.current is self:
             GuidePanel.current = None

@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import FreeCAD
 
+from workcal_wb.core.result import USABLE
 from workcal_wb.gui.task_panels import QtCore, QtWidgets
 
 translate = FreeCAD.Qt.translate
@@ -23,6 +24,7 @@ class Scene:
     fit: list = field(default_factory=list)
     labels: list = field(default_factory=list)
     orientation: object = None
+    poses: object = None  # gui.candidate_display.Poses drawn over the view (an ambiguous result's poses)
 
 
 class Step:
@@ -98,7 +100,7 @@ def off_model_advice(calibration) -> str:
     from workcal_wb.fc.regions import off_model
     from workcal_wb.gui.task_panels.common import for_people
 
-    if calibration is None or calibration.Status in ("ok", "new"):
+    if calibration is None or calibration.Status in (*USABLE, "new"):
         return ""
     paragraphs = []
     for role, note in off_model(calibration).items():

@@ -3,7 +3,9 @@
 The verdict in colour, W as FreeCAD's placement (position, axis and angle) and as the paper's Z-Y-Z
 angles and Omega, the checks as a table, the uncertainty at the toolpath, the models placed on the
 scan, and Accept / Calibrate again / Open the report.  For an ambiguous result the other poses the
-match found can be stepped through in the view, with the sentence on what would tell them apart; for
+match found can be stepped through in the view, each drawn with the workpiece frame's axes and the
+toolpath in its own colour (gui.candidate_display), its difference from the best in words and the
+sentence on what would tell them apart, and one of them chosen ("ok (chosen)", recorded); for
 a result that is not ok, what each region holds that its model does not explain (red in the view)
 and what to change.
 """
@@ -13,9 +15,10 @@ import math
 
 import FreeCAD
 
-from workcal_wb.core import frames
+from workcal_wb.core import choice, frames
 from workcal_wb.core.errors import WorkCalError
-from workcal_wb.gui import replay
+from workcal_wb.core.result import AMBIGUOUS, CHOSEN, OK, USABLE
+from workcal_wb.gui import candidate_display, replay
 from workcal_wb.gui.task_panels import QtCore, QtWidgets
 from workcal_wb.gui.task_panels.common import for_people
 from workcal_wb.gui.view import FROM_SCANNER
@@ -25,8 +28,9 @@ from .base import ATTENTION, DONE, FAILED, TODO, Scene, Step, button, form_layou
 translate = FreeCAD.Qt.translate
 
 VERDICTS = {
-    "ok": ("#2e7d32", translate("WorkCal", "OK: W can be used")),
-    "ambiguous": ("#d06000", translate("WorkCal", "AMBIGUOUS: another pose fits almost as well")),
+    OK: ("#2e7d32", translate("WorkCal", "OK: W can be used")),
+    CHOSEN: ("#2e7d32", translate("WorkCal", "OK (CHOSEN): W from the pose chosen among those that fit")),
+    AMBIGUOUS: ("#d06000", translate("WorkCal", "AMBIGUOUS: another pose fits almost as well")),
     "failed": ("#c62828", translate("WorkCal", "FAILED: do not use W")),
     "error": ("#c62828", translate("WorkCal", "NOT CALIBRATED: the inputs could not be used")),
 }
@@ -114,8 +118,17 @@ class ResultStep(Step):
         poses.addWidget(label(translate("WorkCal", "Poses that fit:")))
         poses.addLayout(row(self.previous_pose, self.next_pose))
         poses.addWidget(self.pose_label)
+        self.difference = label(name="WorkCalCandidateDifference")
+        poses.addWidget(self.difference)
         self.tie = label(name="WorkCalTieBreaker")
         poses.addWidget(self.tie)
+        self.choose_button = button(translate("WorkCal", "Choose this pose"),
+                                    translate("WorkCal", "This pose is the right one: W from it, recorded with your "
+                                                         "name, the time and the poses shown"), self.choose,
+                                    "WorkCalChoosePose")
+        self.chosen = label(name="WorkCalChosen")
+        poses.addWidget(self.choose_button)
+        poses.addWidget(self.chosen)
         layout.addWidget(self.poses)
 
         self.accept_button = button(translate("WorkCal", "Accept"), translate("WorkCal", "W is right: go on to the "
@@ -151,9 +164,9 @@ class ResultStep(Step):
         if calibration is None:
             return TODO, translate("WorkCal", "Calibrate first")
         status = calibration.Status
-        if status == "ok":
-            return (DONE, translate("WorkCal", "OK, accepted")) if calibration.Accepted else \
-                (TODO, translate("WorkCal", "OK: check it and accept it"))
+        if status in USABLE:
+            return (DONE, translate("WorkCal", "{}, accepted").format(status.upper())) if calibration.Accepted else \
+                (TODO, translate("WorkCal", "{}: check it and accept it").format(status.upper()))
         first = calibration.Reasons[0] if calibration.Reasons else ""
         return FAILED if status in ("failed", "error") else ATTENTION, f"{status.upper()}: {first}"
 
@@ -193,8 +206,8 @@ class ResultStep(Step):
             self.omega.setText(f"{_number(frames.omega(W), 3)} deg")
         self._fill_checks(result)
         self._fill_uncertainty(calibration, result)
-        self._fill_poses(calibration)
-        self.accept_button.setEnabled(calibration.Status == "ok" and not calibration.Accepted)
+        self._fill_poses(calibration, result)
+        self.accept_button.setEnabled(calibration.Status in USABLE and not calibration.Accepted)
         self.accept_button.setText(translate("WorkCal", "Accepted") if calibration.Accepted
                                    else translate("WorkCal", "Accept"))
         self.map_button.setEnabled(result is not None and result.U is not None)
@@ -240,21 +253,20 @@ class ResultStep(Step):
 
     # ------------------------------------------------------------------ candidate poses
     def rival_role(self, calibration):
-        """The match with other poses that fit, when the result is ambiguous: "workpiece", "reference" or None."""
-        from workcal_wb.fc.placed_model import candidate_poses
+        """The match with other poses that fit, when the result is ambiguous or one of them was chosen:
+        "workpiece", "reference" or None."""
+        _, result = self.result()
+        return None if result is None else choice.chosen_role(result)
 
-        if calibration.Status != "ambiguous":
-            return None
-        return next((r for r in ("workpiece", "reference") if len(candidate_poses(calibration, r)) > 1), None)
+    def _fill_poses(self, calibration, result) -> None:
+        from workcal_wb.fc.placed_model import tie_breaker
 
-    def _fill_poses(self, calibration) -> None:
-        from workcal_wb.fc.placed_model import candidate_poses, tie_breaker
-
-        role = self.rival_role(calibration)
+        role = None if result is None else choice.chosen_role(result)
         self.poses.setVisible(role is not None)
         if role is None:
             return
-        count = len(candidate_poses(calibration, role))
+        shown = self.shown_poses(calibration, result, role)
+        count = len(shown)
         self.candidate = min(self.candidate, count - 1)
         words = translate("WorkCal", "workpiece") if role == "workpiece" else translate("WorkCal", "reference object")
         self.pose_label.setText(translate("WorkCal", "Showing pose {} of {} of the {}{}").format(
@@ -262,7 +274,32 @@ class ResultStep(Step):
             else ""))
         self.previous_pose.setEnabled(self.candidate > 0)
         self.next_pose.setEnabled(self.candidate < count - 1)
+        self.difference.setText(_pose_words(shown[self.candidate]))
+        self.difference.setStyleSheet(f"QLabel {{ color: {candidate_display.hex_colour(self.candidate)}; "
+                                      "font-weight: bold; }")
         self.tie.setText(tie_breaker(calibration, role, max(self.candidate, 1)))
+        record = result.choice
+        self.choose_button.setVisible(record is None)
+        self.choose_button.setEnabled(record is None)
+        self.chosen.setVisible(record is not None)
+        if record is not None:
+            self.chosen.setText(translate("WorkCal", "Chosen by {} on {}: pose {} of {}.").format(
+                record.who, record.when, record.index + 1, record.count))
+
+    def shown_poses(self, calibration, result, role) -> list:
+        """What the panel says of each pose of ``role``: core.choice.evidence, its difference from the best
+        named along the model's axes (kept per calibration result: the model's axes cost a read)."""
+        key = (calibration.Name, role, calibration.ResultJson)
+        if getattr(self, "_shown_key", None) != key:
+            from workcal_wb.fc.models import model_cloud
+
+            source = calibration.Workpiece if role == "workpiece" else calibration.Reference
+            axes = choice.part_axes(model_cloud(source, role=role).points)
+            found = choice.poses(result, role)
+            self._shown = [choice.evidence(p, i, choice.difference(found[0].matrix, p.matrix, axes))
+                           for i, p in enumerate(found)]
+            self._shown_key = key
+        return self._shown
 
     def show_pose(self, step: int) -> None:
         """Show the models on the scan at the next or previous pose the match found."""
@@ -273,6 +310,46 @@ class ResultStep(Step):
         replay.run("workcal_wb.fc.placed_model.show_candidate", calibration, self.candidate, result="placed_models")
         self.guide.go(self.NAME)
         self.reveal(self.poses)
+
+    def choose(self) -> None:
+        """Choose the pose shown: W from it, "ok (chosen)", recorded (one undo step)."""
+        calibration = self.guide.calibration()
+        if calibration is None or self.rival_role(calibration) is None:
+            return
+        index = self.candidate
+        self.run_guarded(translate("WorkCal", "Choose the pose"), lambda: replay.run(
+            "workcal_wb.fc.calibration_object.choose_pose", calibration, index))
+        self.guide.go(self.NAME)
+        self.reveal(self.poses)
+
+    def drawn_poses(self, calibration):
+        """The poses to draw over the view (candidate_display.Poses), None when there is no choice to make."""
+        from workcal_wb.fc.calibration_object import toolpath_source
+        from workcal_wb.fc.setup import toolpath_of
+
+        _, result = self.result()
+        role = None if result is None else choice.chosen_role(result)
+        if role is None:
+            return None
+        source = toolpath_source(calibration) or toolpath_of(calibration.Document)
+        return candidate_display.Poses([p.matrix for p in choice.poses(result, role)], self.candidate,
+                                       calibration.FrameSize.Value, self.toolpath_points(source))
+
+    def toolpath_points(self, source):
+        """The toolpath's points in X as it runs (None without one, or when it cannot be read), kept per source."""
+        from workcal_wb.core.toolpath import linearised
+        from workcal_wb.fc.toolpath_input import read_source
+
+        if source is None:
+            return None
+        key = source if isinstance(source, str) else source.Name
+        if getattr(self, "_path_key", None) != key:
+            try:
+                self._path = linearised(read_source(source)).points()
+            except WorkCalError:
+                self._path = None
+            self._path_key = key
+        return self._path
 
     # ------------------------------------------------------------------ actions
     def accept(self) -> None:
@@ -321,5 +398,21 @@ class ResultStep(Step):
             ("workpiece", translate("WorkCal", "Workpiece model, placed")),
             ("reference", translate("WorkCal", "Reference model, placed")))]
         placed = [(obj, text) for obj, text in placed if obj is not None]
-        return Scene(show=[scan] + [obj for obj, _ in placed], fit=[scan], labels=[(t, o) for o, t in placed],
-                     orientation=FROM_SCANNER)
+        poses = self.drawn_poses(calibration)
+        in_doubt = None if poses is None else find(calibration, self.rival_role(calibration), ON_SCAN)
+        return Scene(show=[scan] + [obj for obj, _ in placed], fit=[in_doubt or scan],  # the poses in doubt up close
+                     labels=[(t, o) for o, t in placed], orientation=FROM_SCANNER, poses=poses)
+
+
+def _pose_words(shown: dict) -> str:
+    """One pose as the panel says it: how it differs from the best, and what the match weighed of it."""
+    if shown["index"] == 0:
+        text = translate("WorkCal", "Pose 1: the pose the calibration found best.")
+    else:
+        text = translate("WorkCal", "Pose {}: {} from the best.").format(shown["index"] + 1, shown["difference"])
+    if "standard_errors_below_best" in shown and shown["index"]:
+        text += " " + translate("WorkCal", "Score {} of the best's, {} standard errors below it.").format(
+            f"{100 * shown['score_ratio']:.0f} %", _number(shown["standard_errors_below_best"], 1))
+    if "symmetry" in shown:
+        text += " " + translate("WorkCal", "The model's symmetry gives it.")
+    return text
