@@ -154,10 +154,13 @@ class ResultStep(Step):
         calibration = self.guide.calibration()
         if calibration is None or not calibration.ResultJson:
             return calibration, None
-        try:
-            return calibration, result_of(calibration)
-        except WorkCalError:
-            return calibration, None
+        key = (calibration.Name, calibration.ResultJson)  # read once per stored result: a large scan's is long
+        if getattr(self, "_read", (None, None))[0] != key:
+            try:
+                self._read = key, result_of(calibration)
+            except WorkCalError:
+                self._read = key, None
+        return calibration, self._read[1]
 
     def state(self) -> tuple:
         calibration, result = self.result()
