@@ -52,6 +52,8 @@ def test_a_pure_shift_is_named_in_mm_along_the_part_axis(axes):
     assert named.words == "shifted 12 mm along the part's long axis (X)"
     sideways = choice.difference(U, U @ frames.rigid(translation=[0.0, -3.5, 0.0]), axes)
     assert sideways.words == "shifted -3.5 mm along the part's middle axis (Y)"
+    small = choice.difference(U, U @ frames.rigid(translation=[0.0, 0.0, -0.5]), axes)
+    assert small.words == "shifted -0.5 mm along the part's short axis (Z)"
 
 
 def test_a_turn_and_a_shift_off_the_axes_are_both_said(axes):
@@ -126,8 +128,7 @@ def test_ok_chosen_only_with_the_record(axes, tmp_path):
     del data["choice"]
     with pytest.raises(InputError, match="chosen"):
         CalibrationResult.from_dict(data, "result.json")
-    data["choice"] = {"who": "anna"}
-    with pytest.raises(InputError, match="result.json"):
+    with pytest.raises(InputError, match="result.json: choice: the choice has no when"):
         CalibrationResult.from_dict({**data, "choice": {"who": "anna"}}, "result.json")
 
 

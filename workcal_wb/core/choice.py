@@ -75,7 +75,9 @@ class Difference:
 
 
 def _number(value: float) -> str:
-    return f"{value:.1f}".rstrip("0").rstrip(".").replace("-0", "0") if abs(value) >= 0.05 else "0"
+    """To 0.1, without a trailing ".0" or a "-0"."""
+    text = f"{value:.1f}".rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
 
 
 def _along(direction, axes: PartAxes) -> tuple[str, float]:
@@ -182,10 +184,10 @@ def choose(result: CalibrationResult, role: str, index: int, axes: PartAxes, who
     """The ambiguous ``result`` with pose ``index`` of ``role``'s match chosen by ``who`` (the OS user
     name) at ``when`` (ISO 8601; default now): that pose as U (or V), W = V^-1 U, status "ok (chosen)"
     and the record.  ``axes``: the ``role`` model's (part_axes), to name each pose's difference."""
-    if result.status != AMBIGUOUS or chosen_role(result) != role:
-        raise InputError(f"only an ambiguous calibration's poses can be chosen, and of the match in doubt; this one "
-                         f"is {result.status!r}" + ("" if result.status != AMBIGUOUS else f", its {role} match has "
-                                                                                         "no other pose"))
+    if result.status != AMBIGUOUS:
+        raise InputError(f"only an ambiguous calibration's poses can be chosen; this one is {result.status!r}")
+    if chosen_role(result) != role:
+        raise InputError(f"the {role} match of this calibration has no other pose to choose")
     found = poses(result, role)
     if not 0 <= index < len(found):
         raise InputError(f"the {role} match has {len(found)} poses (0 to {len(found) - 1}), no pose {index}")
