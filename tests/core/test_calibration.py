@@ -362,6 +362,18 @@ def test_a_tolerance_past_a_share_of_the_models_size_is_refused(plain):
                   options=CalibrationOptions(tolerance_mm=1e6))
 
 
+def test_the_same_model_given_for_both_objects_is_refused_before_any_search(plain, monkeypatch):
+    """The workpiece's model given again as the reference's (the same file read twice): no scan can say
+    which object is which, and the search for a second object of that shape would only end in "not
+    found"; refused at once, naming both models."""
+    scene, scan = plain
+    workpiece = scene.workpiece_model()
+    monkeypatch.setattr(calibration, "locate", lambda *args, **kwargs: pytest.fail("searched the scan"))
+    with pytest.raises(InputError, match=r"the workpiece model car and the reference model car\(copy\) are the same "
+                                         r"shape at the same place"):
+        calibrate(scan.cloud(), workpiece, Cloud(workpiece.points.copy(), name="car(copy)"))
+
+
 @pytest.fixture(scope="module")
 def mat_beside_the_block():
     """The reference region drawn around the block and a band of the platform beside it (a mat raised

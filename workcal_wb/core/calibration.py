@@ -76,6 +76,8 @@ REFIT_THREADS = 2
 DRAWN_AT_ONCE = 8
 # Scans of one scene taken in the same units have extents within this factor of each other.
 UNIT_MISMATCH_RATIO = 8.0
+# Vertices this close (mm) are the same: float noise of a model read twice or copied.
+SAME_SHAPE_MM = 1e-6
 # The largest tolerance (a share of the larger model's diagonal) a calibration can be checked to: past
 # it a model several percent the wrong size, or a pose a few degrees off, passes every gate.
 MAX_TOLERANCE_OF_SIZE = 0.05
@@ -112,11 +114,22 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
         return _calibrate(scans, workpiece, reference, regions, toolpath_points, options, progress)
 
 
+def _same_shape(first, second) -> bool:
+    """Whether two models (Clouds or SurfaceModels) have the same vertices, to SAME_SHAPE_MM: one file given
+    for both objects, or a copy of it."""
+    a, b = (np.asarray(m.vertices if isinstance(m, SurfaceModel) else m.points) for m in (first, second))
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= SAME_SHAPE_MM))
+
+
 def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: CalibrationOptions,
                progress) -> CalibrationResult:
     started = time.perf_counter()
     report = progress or (lambda fraction, message: None)
     scan = merge_scans(scans)
+    if _same_shape(workpiece, reference):
+        raise InputError(f"the workpiece model {workpiece.name} and the reference model {reference.name} are the same "
+                         "shape at the same place: one of them is the wrong file (no scan can tell which object is "
+                         "which); give the workpiece's model X-A and the reference object's model B-P")
     report(0.0, "preparing the models")
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, options.seed) for m in (workpiece, reference)]
     workpiece_surface, reference_surface = surfaces
