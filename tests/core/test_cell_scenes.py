@@ -154,7 +154,7 @@ def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_ov
     (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC
     hypothesis ranked 4th to 11th by its rough score among wrong turns and was never refined, and the
     platform ruled out the three rivals listed.  Rough poses are now taken a few steps first (match.
-    PRE_REFINED): the right pose is found with most seeds (4 of 4 on Debian 12, 3 of 4 on Debian 13 here);
+    SEARCH.pre_refined): the right pose is found with most seeds (4 of 4 on Debian 12, 3 of 4 on Debian 13 here);
     Debian 13's seed 3 still misses it and stays ambiguous (three rivals half a turn from its best: one
     sinks through the platform, two stand on it)."""
     cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))

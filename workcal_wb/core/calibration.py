@@ -20,7 +20,7 @@ from .distortion import distortion
 from .edges import slide
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import MEDIUM_POINTS, METHODS, MIN_SCAN_POINTS, MatchOptions, match, match_pose, refine_given
+from .match import METHODS, MIN_SCAN_POINTS, REFINE, MatchOptions, match, match_pose, refine_given
 from .off_model import off_model
 from .refine import coarse_to_fine
 from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
@@ -497,7 +497,7 @@ def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, ga
     if options.method != "robust":
         return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
     rng = np.random.default_rng(options.seed)
-    medium = pointops.random_subset(points, MEDIUM_POINTS, rng)
+    medium = pointops.random_subset(points, REFINE.medium_points, rng)
     state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
     return frames.invert(refine_given(state, medium, points, surface, options.tolerance_mm).T)
 

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import SHAPE_WORDS, Cloud, shape_kind
-from .match import MIN_WITHIN_TOLERANCE_PCT as MIN_MATCH_WITHIN_TOLERANCE_PCT, MatchOptions, match
+from .match import VERDICT, MatchOptions, match
 from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
                      Reason)
 from .surface import GATE_CELLS, SurfaceModel
@@ -55,7 +55,7 @@ TOUCHING_SHARE = 0.9
 # A match only locates an object when most matched points lie within the tolerance and most of the candidate
 # is explained (a wrong model placed "as well as it goes" scores far lower): the reference is rigid and
 # unchanged, the workpiece may have had clay added or carved.
-MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": MIN_MATCH_WITHIN_TOLERANCE_PCT}
+MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": VERDICT.min_within_tolerance_pct}
 MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
 # Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
 # unless a search comes back to a pose it found before (within these limits).
