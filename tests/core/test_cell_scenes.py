@@ -6,7 +6,7 @@ import pytest
 
 from workcal_wb.core import calibration, frames, physics, pointops
 from workcal_wb.core.edges import centre_on_edges
-from workcal_wb.core.regions import LINK_SPACINGS, _clusters, find_platform, near_points
+from workcal_wb.core.regions import CLUSTERS, _clusters, find_platform, near_points
 from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.result import (DISTORTION, MANY_WAYS, RIVAL, SEARCH_DOUBT, SPLIT_UNEXPLAINED, Candidate, Reason,
@@ -177,7 +177,7 @@ def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():
     assert platform.below[cell.mask("reference")].mean() < 0.03
     # The clusters its size test split the objects into come with it, for the regions.
     spacing = pointops.median_spacing(points, seed=0)
-    assert np.array_equal(platform.labels, _clusters(points[~platform.below], LINK_SPACINGS * spacing))
+    assert np.array_equal(platform.labels, _clusters(points[~platform.below], CLUSTERS.link_spacings * spacing))
 
 
 def test_which_points_lie_near_a_placed_model_is_what_the_kd_tree_says():

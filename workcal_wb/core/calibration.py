@@ -23,8 +23,8 @@ from .geometry import Cloud
 from .match import METHODS, MIN_SCAN_POINTS, REFINE, MatchOptions, match, match_pose, refine_given
 from .off_model import off_model
 from .refine import coarse_to_fine
-from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
-                      nearer_own_model, refit, standing_on)
+from .regions import (LOCATE, find_platform, joins_within, locate, match_trusted, nearer_own_model, refit,
+                      standing_on)
 from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, RMS, SCAN_NOT_SOLID, UNCERTAINTY, WITHIN_TOLERANCE,
                      CalibrationResult, MatchResult, Reason)
 from .surface import SurfaceModel
@@ -552,13 +552,13 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
                       "passed": m.status == OK, "unit": ""})
         gates.append({"code": f"{role}_{RMS}", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
                       "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})
-        share = MIN_WITHIN_TOLERANCE_PCT[role]
+        share = LOCATE.min_within_tolerance_pct[role]
         gates.append({"code": f"{role}_{WITHIN_TOLERANCE}", "name": f"{role} points within tolerance",
                       "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
                       "unit": "%"})
         gates.append({"code": f"{role}_explained", "name": f"{role} region explained by its model",
-                      "value": round(100 * m.fitness, EXPLAINED_DIGITS), "limit": 100 * MIN_FITNESS[role],
-                      "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%",
+                      "value": round(100 * m.fitness, EXPLAINED_DIGITS), "limit": 100 * LOCATE.min_fitness[role],
+                      "passed": bool(m.fitness >= LOCATE.min_fitness[role]), "unit": "%",
                       "why": unexplained[role].said(role)})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"
