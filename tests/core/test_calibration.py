@@ -141,10 +141,9 @@ def test_the_bound_is_the_same_on_one_refit_thread_as_on_two(car, user_regions, 
     """The draws and nudges are made in order, whatever thread refits them and however many are drawn at a time."""
     _, scan, _, _ = car
     models, regions, two_threads = user_regions
-    monkeypatch.setattr(calibration, "REFIT_THREADS", 1)
-    monkeypatch.setattr(calibration, "DRAWN_AT_ONCE", 1)
+    monkeypatch.setattr(calibration, "BOOTSTRAP", replace(calibration.BOOTSTRAP, refit_threads=1, drawn_at_once=1))
     one_thread = calibrate(scan.cloud(), *models, regions=regions)
-    assert calibration.REFIT_THREADS == 1 and two_threads.uncertainty == one_thread.uncertainty
+    assert calibration.BOOTSTRAP.refit_threads == 1 and two_threads.uncertainty == one_thread.uncertainty
 
 
 @pytest.mark.slow

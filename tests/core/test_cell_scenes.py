@@ -6,7 +6,7 @@ import pytest
 
 from workcal_wb.core import calibration, frames, physics, pointops
 from workcal_wb.core.edges import centre_on_edges
-from workcal_wb.core.regions import LINK_SPACINGS, _clusters, find_platform, near_points
+from workcal_wb.core.regions import CLUSTERS, _clusters, find_platform, near_points
 from workcal_wb.core.surface import SurfaceModel
 from workcal_wb.core.calibration import CalibrationOptions, calibrate
 from workcal_wb.core.result import (DISTORTION, MANY_WAYS, RIVAL, SEARCH_DOUBT, SPLIT_UNEXPLAINED, Candidate, Reason,
@@ -154,7 +154,7 @@ def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_ov
     (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC
     hypothesis ranked 4th to 11th by its rough score among wrong turns and was never refined, and the
     platform ruled out the three rivals listed.  Rough poses are now taken a few steps first (match.
-    PRE_REFINED): the right pose is found with most seeds (4 of 4 on Debian 12, 3 of 4 on Debian 13 here);
+    SEARCH.pre_refined): the right pose is found with most seeds (4 of 4 on Debian 12, 3 of 4 on Debian 13 here);
     Debian 13's seed 3 still misses it and stays ambiguous (three rivals half a turn from its best: one
     sinks through the platform, two stand on it)."""
     cell = cell_scan(CellSpec(azimuth_deg=0, elevation_deg=20, seed=7))
@@ -177,7 +177,7 @@ def test_the_platform_seen_low_shows_its_side_face_and_is_still_found():
     assert platform.below[cell.mask("reference")].mean() < 0.03
     # The clusters its size test split the objects into come with it, for the regions.
     spacing = pointops.median_spacing(points, seed=0)
-    assert np.array_equal(platform.labels, _clusters(points[~platform.below], LINK_SPACINGS * spacing))
+    assert np.array_equal(platform.labels, _clusters(points[~platform.below], CLUSTERS.link_spacings * spacing))
 
 
 def test_which_points_lie_near_a_placed_model_is_what_the_kd_tree_says():

@@ -1,9 +1,11 @@
 """The scan's strain against its models (distortion.py), measured at the true poses of a cell scan."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from workcal_wb.core import frames
-from workcal_wb.core.distortion import _linearised, distortion
+from workcal_wb.core.distortion import READING, _linearised, distortion
 from workcal_wb.core.simulate import shapes
 from workcal_wb.core.simulate.cell import CellSpec, cell_scan
 from workcal_wb.core.surface import SurfaceModel
@@ -30,7 +32,7 @@ def test_a_scale_is_measured(cell, monkeypatch):
     """What a scale adds to what the undistorted scan shows (its noise, counted here however small:
     0.005-0.013 % over eight such scenes at 0.1 mm of noise, 0.006-0.013 % before the foot became the
     lever) is that scale, to 3 %: the scanner's commonest error, shown by both objects."""
-    monkeypatch.setattr("workcal_wb.core.distortion.SIGNIFICANCE", 0.0)
+    monkeypatch.setattr("workcal_wb.core.distortion.READING", replace(READING, significance=0.0))
     undistorted, found = (_measured(cell, np.eye(3) * scale) for scale in (1.0, 1.001))
     assert np.abs(undistorted["strain"]).max() < 2e-4 and undistorted["shift_mm"] < 0.05, undistorted
     assert np.abs(found["strain"] - undistorted["strain"] - 0.001 * np.eye(3)).max() < 3e-5, found["strain"]
@@ -84,8 +86,8 @@ def test_strains_a_small_part_beside_flat_faces_cannot_show_are_not_read_from_no
     regions = [scan.cloud.points[scan.mask(role)] for role in ("workpiece", "reference")]
     found = distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])
     assert found["largest_strain_pct"] < 0.03 and found["shift_mm"] < 0.02, found
-    monkeypatch.setattr("workcal_wb.core.distortion.SHOWN_MM", 0.0)  # every direction counts ...
-    monkeypatch.setattr("workcal_wb.core.distortion.SIGNIFICANCE", 0.0)  # ... however little it explains
+    # every direction counts, however little it explains
+    monkeypatch.setattr("workcal_wb.core.distortion.READING", replace(READING, shown_mm=0.0, significance=0.0))
     assert distortion(regions, surfaces, [scan.U, scan.V], surfaces[0].points, [1.0, 1.0])["largest_strain_pct"] < 0.03
 
 
@@ -96,7 +98,7 @@ def test_noise_at_a_blocks_edges_is_not_read_as_a_strain():
     reads short on one side: a 0.04 % scale, a 0.17 mm "shift" (0.20 mm against the nearest samples'
     planes with the points as levers, the check before).  The points near its edges are left out (with
     the few beyond the gate, about a tenth of them).  One scene's draw of noise: the mean over many draws
-    is in distortion.EDGE_DEG's comment."""
+    is in distortion.FIT.edge_deg's comment."""
     scan = cell_scan(CellSpec(frame="arbitrary", seed=5, noise_mm=0.35, elevation_deg=25.0))
     surfaces = [SurfaceModel(m, 0) for m in (scan.workpiece_model, scan.reference_model)]
     regions = [scan.cloud.points[scan.mask(role)] for role in ("workpiece", "reference")]

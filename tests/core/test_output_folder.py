@@ -4,6 +4,7 @@ previous set whole, and no temporary file survives a signal."""
 import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -55,27 +56,30 @@ def assert_manifest_is_the_folder(out: Path, status: str):
 
 
 @pytest.fixture(scope="module")
-def ok_run(scene, tmp_path_factory):
-    """The folder of an ok calibration with a KRL program, as the first run leaves it."""
+def ok_run(scene, tmp_path_factory) -> Path:
+    """The folder of an ok calibration with a KRL program, as the first run leaves it: calibrated once
+    for the module, and never changed (each test works on a copy)."""
     out = tmp_path_factory.mktemp("ok") / "cell"
     assert main(calibrate_args(scene, out)) == 0
     assert programs(out) == ["toolpath_calibrated.src"]
     assert json.loads((out / "result.json").read_text())["status"] == "ok"
-    return snapshot(out)
+    return out
 
 
-def fresh_copy(ok_run, scene, tmp_path) -> Path:
-    """A folder holding the ok run's set (re-run into a new folder: same files), plus a user's own file."""
+def fresh_copy(ok_run: Path, tmp_path) -> Path:
+    """A folder holding the ok run's set (a copy: the same files as a run into it, but for the program's
+    header naming the ok run's result.json), plus a user's own file."""
     out = tmp_path / "cell"
-    assert main(calibrate_args(scene, out)) == 0
+    shutil.copytree(ok_run, out)
     (out / "notes.txt").write_text("the operator's notes\n")
+    assert_manifest_is_the_folder(out, "ok")
     return out
 
 
 @pytest.mark.slow
 def test_a_failed_calibration_leaves_no_program_of_the_earlier_run(ok_run, scene, tmp_path):
     # The finding: the first run's program, "status ok", stayed beside a result.json that says "failed".
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     (tmp_path / "indices.txt").write_text("\n".join(str(i) for i in range(3000)))  # bare platform: gates fail
     box = ["-10000", "-10000", "0", "10000", "10000", "10000"]
     code = main(calibrate_args(scene, out, "--workpiece-indices", str(tmp_path / "indices.txt"), "--reference-box", *box))
@@ -89,7 +93,7 @@ def test_a_failed_calibration_leaves_no_program_of_the_earlier_run(ok_run, scene
 @pytest.mark.slow
 def test_a_run_that_finds_no_workpiece_leaves_no_earlier_result(ok_run, scene, tmp_path):
     # The finding: exit 2 and the whole old set, result.json "ok" included, stayed.
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     sphere = tmp_path / "sphere.xyz"
     u, v = np.meshgrid(np.linspace(0, np.pi, 60), np.linspace(0, 2 * np.pi, 120))
     np.savetxt(sphere, 90 * np.column_stack([np.sin(u).ravel() * np.cos(v).ravel(),
@@ -107,7 +111,7 @@ def test_a_run_that_finds_no_workpiece_leaves_no_earlier_result(ok_run, scene, t
 
 @pytest.mark.slow
 def test_bad_input_after_an_ok_run_removes_the_earlier_set(ok_run, scene, tmp_path, capsys):
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     broken = tmp_path / "broken.ply"
     data = (scene / "scan.ply").read_bytes()
     broken.write_bytes(data[:len(data) // 2])
@@ -120,7 +124,7 @@ def test_bad_input_after_an_ok_run_removes_the_earlier_set(ok_run, scene, tmp_pa
 @pytest.mark.slow
 def test_an_interrupt_before_the_program_leaves_the_earlier_set_whole(ok_run, scene, tmp_path, monkeypatch):
     # The finding: SIGINT between the writes left a new result.json beside the old program.
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     before = snapshot(out)
 
     def interrupted(*args, **kwargs):
@@ -135,7 +139,7 @@ def test_an_interrupt_before_the_program_leaves_the_earlier_set_whole(ok_run, sc
 def test_the_result_and_program_are_in_before_the_report(ok_run, scene, tmp_path, monkeypatch, capsys):
     """The critical path first: result.json and the program are committed as a set before the report's
     figures are drawn; an interrupt while drawing them leaves that set (never the earlier report)."""
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     seen = {}
 
     def interrupted(calibration, folder, **kwargs):
@@ -154,7 +158,7 @@ def test_the_result_and_program_are_in_before_the_report(ok_run, scene, tmp_path
 
 @pytest.mark.slow
 def test_a_program_in_another_format_replaces_the_earlier_one(ok_run, scene, tmp_path):
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     args = calibrate_args(scene, out)
     args[args.index("krl")] = "rapid"
     assert main(args) == 0
@@ -164,7 +168,7 @@ def test_a_program_in_another_format_replaces_the_earlier_one(ok_run, scene, tmp
 
 @pytest.mark.slow
 def test_an_export_refused_as_unsafe_exits_1_and_leaves_no_program(ok_run, scene, tmp_path, capsys):
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     assert main(calibrate_args(scene, out, "--method", "icp", "--tolerance", "0.001")) == 1
     assert programs(out) == [] and "toolpath not written" in capsys.readouterr().err
 
@@ -272,10 +276,11 @@ def test_a_part_being_written_by_a_running_process_is_left_alone(toolpath_files)
 
 
 @pytest.mark.slow
-def test_the_program_names_the_result_json_beside_it(ok_run, scene, tmp_path):
+def test_the_program_names_the_result_json_beside_it(scene, tmp_path):
     """The program's header carries the SHA-256 of the result.json of its set (as the manifest lists
     it), also when the program is written later from that file by ``toolpath``."""
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = tmp_path / "cell"
+    assert main(calibrate_args(scene, out)) == 0  # a run of its own: the program names its result.json's path
     digest = hashlib.sha256((out / "result.json").read_bytes()).hexdigest()
     assert json.loads((out / "manifest.json").read_text())["files"]["result.json"]["sha256"] == digest
     assert f"result sha256 {digest[:16]}" in (out / "toolpath_calibrated.src").read_text()
@@ -349,7 +354,7 @@ def test_a_commit_killed_at_any_step_leaves_a_whole_set_or_none_a_reader_takes(t
 
 @pytest.mark.slow
 def test_a_result_json_that_its_manifest_does_not_list_is_refused(ok_run, scene, tmp_path, capsys):
-    out = fresh_copy(ok_run, scene, tmp_path)
+    out = fresh_copy(ok_run, tmp_path)
     result = json.loads((out / "result.json").read_text())
     result["warnings"].append("edited by hand")
     (out / "result.json").write_text(json.dumps(result))

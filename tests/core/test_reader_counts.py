@@ -154,6 +154,7 @@ def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
     point per voxel, with its normal), saying so; its counts are still checked both ways."""
     from workcal_wb.core import readers
     from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.readers import thinning
     from workcal_wb.core.writers import write_ply
 
     rng = np.random.default_rng(3)
@@ -164,12 +165,12 @@ def test_a_scan_larger_than_the_limit_is_thinned_while_read(tmp_path):
     write_ply(path, Cloud(points, normals))
     whole = readers.read_cloud(path)
     assert len(whole) == 60000 and not any("thinned" in w for w in whole.warnings)
-    readers_chunk = readers.THIN_CHUNK
+    readers_chunk = thinning.THIN_CHUNK
     try:
-        readers.THIN_CHUNK = 7000  # several chunks, the grid coarsened on the way
+        thinning.THIN_CHUNK = 7000  # several chunks, the grid coarsened on the way
         thinned = readers.read_cloud(path, max_points=10000)
     finally:
-        readers.THIN_CHUNK = readers_chunk
+        thinning.THIN_CHUNK = readers_chunk
     assert 1000 < len(thinned) <= 5000
     assert any("60,000 points" in w and f"to {len(thinned):,}" in w for w in thinned.warnings)
     rows = {tuple(p) for p in points}
@@ -215,6 +216,7 @@ def test_thinning_while_reading_does_not_depend_on_the_chunk_size(tmp_path):
     so what was kept depended on how the file was cut.)"""
     from workcal_wb.core import readers
     from workcal_wb.core.geometry import Cloud
+    from workcal_wb.core.readers import thinning
 
     rng = np.random.default_rng(5)
     u, v = rng.random((2, 40000)) * 80
@@ -227,12 +229,12 @@ def test_thinning_while_reading_does_not_depend_on_the_chunk_size(tmp_path):
     path.write_bytes(header + points.astype("<f4").tobytes())
     reads = []
     for chunk in (333, 1 << 20):
-        kept_chunk = readers.THIN_CHUNK
+        kept_chunk = thinning.THIN_CHUNK
         try:
-            readers.THIN_CHUNK = chunk
+            thinning.THIN_CHUNK = chunk
             reads.append(readers.read_cloud(path, max_points=8000))
         finally:
-            readers.THIN_CHUNK = kept_chunk
+            thinning.THIN_CHUNK = kept_chunk
     small, whole = reads
     assert np.array_equal(small.points, whole.points) and small.warnings == whole.warnings
     assert 1000 < len(whole) <= 4000 and [5e4, 0.0, 0.0] in whole.points.tolist()

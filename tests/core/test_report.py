@@ -141,10 +141,14 @@ def _failing_fsync(calls_before_failure):
     return fsync
 
 
-@pytest.mark.slow
+def stored_result() -> CalibrationResult:
+    """A calibration's result built directly, for the tests of how the report's files are written."""
+    return CalibrationResult("ok", np.eye(4), U=np.eye(4), V=np.eye(4), tolerance_mm=0.3)
+
+
 @pytest.mark.parametrize("calls_before_failure", [0, 1])  # failing while writing report.json / report.html
-def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, calls_before_failure):
-    result = lumpy[2]
+def test_a_failure_while_writing_leaves_no_report(tmp_path, monkeypatch, calls_before_failure):
+    result = stored_result()
     monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(calls_before_failure))
     with pytest.raises(OutputError, match=r"report\.(json|html): cannot be written \(No space left"):
         write_report(result, tmp_path)
@@ -152,9 +156,8 @@ def test_a_failure_while_writing_leaves_no_report(lumpy, tmp_path, monkeypatch, 
     assert not list(tmp_path.glob("*.part")) and not list(tmp_path.glob(".*.part"))
 
 
-@pytest.mark.slow
-def test_a_failed_rewrite_keeps_the_previous_report(lumpy, tmp_path, monkeypatch):
-    result = lumpy[2]
+def test_a_failed_rewrite_keeps_the_previous_report(tmp_path, monkeypatch):
+    result = stored_result()
     write_report(result, tmp_path, title="first")
     before = (tmp_path / "report.html").read_bytes()
     monkeypatch.setattr(atomic.os, "fsync", _failing_fsync(1))

@@ -259,7 +259,7 @@ def test_view_that_cannot_tell_the_flip_stays_ambiguous(verdict_views):
 def _thin_mesh_judge():
     """A Judge on a thin cylinder mesh with a flat face (a segment 4 mm out from a corner: no sample
     lies on it) and scan points from on the surface to 30 mm off it, and its saturation distance."""
-    from workcal_wb.core.match import EVIDENCE_SIGMAS, FAR_OFF_SIGMAS, Judge, MatchOptions
+    from workcal_wb.core.match import FAR_OFF, VERDICT, Judge, MatchOptions
 
     tube = shapes.cylinder(radius=5.0, height=200.0, edge_mm=4.0)
     corner = tube.points[0]
@@ -273,7 +273,7 @@ def _thin_mesh_judge():
     sample = np.vstack([near, by_tip])
     judge = Judge(sample, surface, (sample[:50], np.full(50, 0.05)), 1.0, MatchOptions(), [])
     judge.gate = 0.3
-    return judge, surface, sample, FAR_OFF_SIGMAS * judge.gate / EVIDENCE_SIGMAS
+    return judge, surface, sample, FAR_OFF.sigmas * judge.gate / VERDICT.evidence_sigmas
 
 
 def test_far_off_distances_are_exact_wherever_they_can_weigh_less_than_fully():
@@ -305,7 +305,7 @@ def test_a_scale_error_does_not_make_a_wrong_pose_ok():
     the truth was reported "ok": it lays the plate's long side face on the model's short one, and the
     64 scan points that run on past that face's end (15 %) were taken for clutter.  Found by a tester
     varying the sensor; the scan is stored, so the test does not depend on the simulator.  On Debian 13,
-    with rough poses refined a few steps first (match.PRE_REFINED), the flip is chosen, "ambiguous" with the truth listed as its rival."""
+    with rough poses refined a few steps first (match.SEARCH.pre_refined), the flip is chosen, "ambiguous" with the truth listed as its rival."""
     from workcal_wb.core.benchmark.verdicts import right
 
     data = np.load(Path(__file__).parent.parent / "data" / "verdict-cases" / "plate-scaled-1pc.npz")
@@ -525,7 +525,7 @@ def test_a_shell_is_never_ok_slid_along_its_bend(case, model):
     - a shell 200 x 60 mm bent at 150 mm, exact, 50 deg above: "ok" turned over (179.9 deg) with seed 1
       on Debian 12, at 0.24 mm RMS (the scan's noise 0.001 mm); the right pose was not among the
       candidates (the nearest, a turn of the best, 4.3 deg off; a match from it goes home).  Since rough poses are taken a few steps before the best are chosen
-      (match.PRE_REFINED), the right pose is listed as a rival and the match is "ambiguous".
+      (match.SEARCH.pre_refined), the right pose is listed as a rival and the match is "ambiguous".
     The tester's scans are in a random frame.  A rule tried in Judge.rank first (a widened pose taken only
     when it keeps as much of the scan on the model) mended the 25 deg shell, but over the tester's 234
     scenes it made two wrong poses "ok" and stopped one: reverted."""
@@ -580,14 +580,14 @@ def test_a_part_is_thin_by_its_wall_however_far_it_bends(name, model, wall_mm):
     5 % of the diagonal across its thinnest axis: the two shells bent furthest spread 5.07 and 5.03 %
     and were left out (the 2 mm one came back "ok" laid on its other face).  Their wall across
     that axis is their thickness; a body's is its depth, 10 % of its diagonal or more."""
-    from workcal_wb.core.match import THIN_PART
+    from workcal_wb.core.match import VERDICT
 
     surface = SurfaceModel(model(), 0)
     if wall_mm is None:
-        assert surface.wall_across > THIN_PART * surface.diagonal, surface.wall_across
+        assert surface.wall_across > VERDICT.thin_part * surface.diagonal, surface.wall_across
     else:
         assert surface.wall_across == pytest.approx(wall_mm, rel=0.1)
-        assert surface.wall_across < THIN_PART * surface.diagonal
+        assert surface.wall_across < VERDICT.thin_part * surface.diagonal
 
 
 @pytest.mark.parametrize("turn_deg", [0.0, 180.0])

@@ -20,11 +20,11 @@ from .distortion import distortion
 from .edges import slide
 from .errors import InputError, NotFound
 from .geometry import Cloud
-from .match import MEDIUM_POINTS, METHODS, MIN_SCAN_POINTS, MatchOptions, match, match_pose, refine_given
+from .match import METHODS, MIN_SCAN_POINTS, REFINE, MatchOptions, match, match_pose, refine_given
 from .off_model import off_model
 from .refine import coarse_to_fine
-from .regions import (MIN_FITNESS, MIN_WITHIN_TOLERANCE_PCT, find_platform, joins_within, locate, match_trusted,
-                      nearer_own_model, refit, standing_on)
+from .regions import (LOCATE, find_platform, joins_within, locate, match_trusted, nearer_own_model, refit,
+                      standing_on)
 from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, RMS, SCAN_NOT_SOLID, UNCERTAINTY, WITHIN_TOLERANCE,
                      CalibrationResult, MatchResult, Reason)
 from .surface import SurfaceModel
@@ -68,31 +68,57 @@ class CalibrationOptions:
             object.__setattr__(self, name, tuple(float(v) for v in vector))
 
 
-# The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
-UNCERTAINTY_FACTOR = 3.0
-# Threads the bootstrap refits run on, and the resamples drawn at a time (8 MB for two regions of
-# 20k points: a default calibration's refits are drawn at once).
-REFIT_THREADS = 2
-DRAWN_AT_ONCE = 8
-# Scans of one scene taken in the same units have extents within this factor of each other.
-UNIT_MISMATCH_RATIO = 8.0
-# Vertices this close (mm) are the same: float noise of a model read twice or copied.
-SAME_SHAPE_MM = 1e-6
-# The largest tolerance (a share of the larger model's diagonal) a calibration can be checked to: past
-# it a model several percent the wrong size, or a pose a few degrees off, passes every gate.
-MAX_TOLERANCE_OF_SIZE = 0.05
-# A toolpath works on the part: its median distance to the model surface, as a fraction of the model
-# diagonal, stays below this unless it was written in another unit or frame.
-TOOLPATH_MAX_MEDIAN_DISTANCE = 0.2
-SURFACE_SAMPLES = 2000
+@dataclass(frozen=True)
+class BootstrapSettings:
+    """The bootstrap refits that bound W's uncertainty (_uncertainty)."""
+
+    # The bound is this many times the RMS displacement over the bootstrap refits (a 3D "3 sigma").
+    factor: float = 3.0
+    # Threads the bootstrap refits run on, and the resamples drawn at a time (8 MB for two regions of
+    # 20k points: a default calibration's refits are drawn at once).
+    refit_threads: int = 2
+    drawn_at_once: int = 8
+    # Points of the workpiece's surface the uncertainty is measured at (and the toolpath's, when given).
+    surface_samples: int = 2000
+
+
+BOOTSTRAP = BootstrapSettings()
+
+
+@dataclass(frozen=True)
+class InputChecks:
+    """What the inputs of a calibration must agree with: the scans' units, the tolerance, the toolpath."""
+
+    # Scans of one scene taken in the same units have extents within this factor of each other.
+    unit_mismatch_ratio: float = 8.0
+    # Model vertices this close (mm) are the same: float noise of a model read twice or copied.
+    same_shape_mm: float = 1e-6
+    # The largest tolerance (a share of the larger model's diagonal) a calibration can be checked to: past
+    # it a model several percent the wrong size, or a pose a few degrees off, passes every gate.
+    max_tolerance_of_size: float = 0.05
+    # A toolpath works on the part: its median distance to the model surface, as a fraction of the model
+    # diagonal, stays below this unless it was written in another unit or frame.
+    toolpath_max_median_distance: float = 0.2
+
+
+INPUT_CHECKS = InputChecks()
+
+
+@dataclass(frozen=True)
+class DistortionSampling:
+    """Points per region the distortion check measures on: ``points`` where its match's residual RMS is
+    ``rms_mm`` or less, more as the square of a larger RMS (the smallest strain it tells from noise goes
+    as RMS / (lever x sqrt(points))), at most as many as a match is finished on (its queries cost per point)."""
+
+    points: int = 5000
+    rms_mm: float = 0.1
+
+
+DISTORTION_SAMPLING = DistortionSampling()
+
 # The match that located a region is its final one when the region holds at most this share of
 # points more than it was made on (see _refit).
 KEPT_MATCH_EXTRA = 0.02
-# Points per region the distortion check measures on: DISTORTION_POINTS where its match's residual RMS is
-# DISTORTION_RMS_MM or less, more as the square of a larger RMS (the smallest strain it tells from noise goes
-# as RMS / (lever x sqrt(points))), at most as many as a match is finished on (its queries cost per point).
-DISTORTION_POINTS = 5000
-DISTORTION_RMS_MM = 0.1
 # The share of a region its model explains, in percent, is given to hundredths (a gate's value is read).
 EXPLAINED_DIGITS = 2
 
@@ -115,10 +141,10 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
 
 
 def _same_shape(first, second) -> bool:
-    """Whether two models (Clouds or SurfaceModels) have the same vertices, to SAME_SHAPE_MM: one file given
+    """Whether two models (Clouds or SurfaceModels) have the same vertices, to InputChecks.same_shape_mm: one file given
     for both objects, or a copy of it."""
     a, b = (np.asarray(m.vertices if isinstance(m, SurfaceModel) else m.points) for m in (first, second))
-    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= SAME_SHAPE_MM))
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= INPUT_CHECKS.same_shape_mm))
 
 
 def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: CalibrationOptions,
@@ -134,12 +160,12 @@ def _calibrate(scans, workpiece, reference, regions, toolpath_points, options: C
     surfaces = [m if isinstance(m, SurfaceModel) else SurfaceModel(m, options.seed) for m in (workpiece, reference)]
     workpiece_surface, reference_surface = surfaces
     larger = max(surfaces, key=lambda s: s.diagonal)  # the smaller may be in another unit: said where it is located
-    if options.tolerance_mm > MAX_TOLERANCE_OF_SIZE * larger.diagonal:
+    if options.tolerance_mm > INPUT_CHECKS.max_tolerance_of_size * larger.diagonal:
         raise InputError(f"tolerance {options.tolerance_mm:g} mm is "
                          f"{100 * options.tolerance_mm / larger.diagonal:.0f} % of the size of {larger.name} "
                          f"(diagonal {larger.diagonal:.1f} mm): at most "
-                         f"{100 * MAX_TOLERANCE_OF_SIZE:.0f} %, or a model several percent the wrong size passes; "
-                         "give the tolerance the machining needs (mm)")
+                         f"{100 * INPUT_CHECKS.max_tolerance_of_size:.0f} %, or a model several percent the wrong size "
+                         "passes; give the tolerance the machining needs (mm)")
     if toolpath_points is not None:
         toolpath_points = _checked_toolpath(toolpath_points, workpiece_surface)
     match_options = dict(method=options.method, tolerance_mm=options.tolerance_mm, seed=options.seed,
@@ -340,7 +366,7 @@ def merge_scans(scans) -> Cloud:
     for cloud, size in zip(clouds, sizes):
         if len(cloud) == 0:
             raise InputError(f"{cloud.name}: the scan has no points")
-        if size > 0 and max(sizes) / size > UNIT_MISMATCH_RATIO:
+        if size > 0 and max(sizes) / size > INPUT_CHECKS.unit_mismatch_ratio:
             raise InputError(f"{cloud.name}: extent {size:.4g} mm against {max(sizes):.4g} mm for the other capture(s): "
                              "the scans seem to be in different units (check --units per file)")
     if len(clouds) == 1:
@@ -362,7 +388,7 @@ def _checked_toolpath(points, surface: SurfaceModel) -> np.ndarray:
     if len(points) == 0 or not np.isfinite(points).all():
         raise InputError("toolpath: points must be finite and not empty")
     distance = float(np.median(surface.tree.query(points)[0]))
-    if distance > TOOLPATH_MAX_MEDIAN_DISTANCE * surface.diagonal:
+    if distance > INPUT_CHECKS.toolpath_max_median_distance * surface.diagonal:
         raise InputError(f"toolpath: its points lie a median {distance:.1f} mm from the workpiece model {surface.name} "
                          f"(diagonal {surface.diagonal:.1f} mm): it is in another unit or frame than the model X-A")
     return points
@@ -417,9 +443,9 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     it): where the data pins a pose the refit comes back; where it leaves a motion nearly free
     the refits stay spread, and so does W (a block seen on two faces is centred between its edges
     in every refit, see edges.py, so there the spread is how well its edges place it).  The bound is
-    UNCERTAINTY_FACTOR times the RMS displacement over the refits.  The studies check it against the
-    true error (docs/studies.md).  The refits run on REFIT_THREADS threads when BLAS is held to one
-    (numpy lets go of the interpreter in their array work); the draws and nudges are made in order, so
+    BOOTSTRAP.factor times the RMS displacement over the refits.  The studies check it against the
+    true error (docs/studies.md).  The refits run on BOOTSTRAP.refit_threads threads when BLAS is held to
+    one (numpy lets go of the interpreter in their array work); the draws and nudges are made in order, so
     the bound does not depend on the threads.
     """
     rng = np.random.default_rng(options.seed + 1)
@@ -428,22 +454,23 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
     n = {role: min(sizes[role], MatchOptions.max_fine_points) for role in roles}
     workpiece_surface = surfaces[0]
     surface_points = workpiece_surface.points[
-        rng.choice(len(workpiece_surface.points), min(SURFACE_SAMPLES, len(workpiece_surface.points)), replace=False)]
+        rng.choice(len(workpiece_surface.points), min(BOOTSTRAP.surface_samples, len(workpiece_surface.points)),
+                   replace=False)]
     targets = {"surface": surface_points}
     if toolpath_points is not None:
         targets["toolpath"] = toolpath_points
     spread = {k: np.zeros(len(p)) for k, p in targets.items()}
     gates = [max(2 * options.tolerance_mm, m.gate_mm) for m in matches]  # max keeps the first when gate_mm is nan
     # Two threads only with BLAS held to one (FreeCAD's workers leave BLAS alone: its own threads would spin).
-    threads = REFIT_THREADS if options.blas_threads == 1 else 1
+    threads = BOOTSTRAP.refit_threads if options.blas_threads == 1 else 1
     refits = []
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        # Drawn DRAWN_AT_ONCE at a time (the draws of 100 refits are 100 MB), all of them handed to the
-        # pool at once: a thread that finishes its refit starts the next without waiting for the other's.
-        for first in range(0, options.resamples, DRAWN_AT_ONCE):
+        # Drawn BOOTSTRAP.drawn_at_once at a time (the draws of 100 refits are 100 MB), all of them handed to
+        # the pool at once: a thread that finishes its refit starts the next without waiting for the other's.
+        for first in range(0, options.resamples, BOOTSTRAP.drawn_at_once):
             jobs = [(scan.points[rng.choice(regions[role], n[role], replace=True)], surface,
                      m.matrix @ _nudge(surface, options.tolerance_mm / 2, rng), gate, options, match_options)
-                    for _ in range(min(DRAWN_AT_ONCE, options.resamples - first))
+                    for _ in range(min(BOOTSTRAP.drawn_at_once, options.resamples - first))
                     for role, surface, m, gate in zip(roles, surfaces, matches, gates)]
             refits += pool.map(lambda job: _refit_pose(*job), jobs)
     rotations = []
@@ -453,14 +480,14 @@ def _uncertainty(scan, regions, surfaces, matches, W, toolpath_points, options, 
         for key, p in targets.items():
             spread[key] += np.sum((frames.apply(W_r, p) - frames.apply(W, p)) ** 2, axis=1)
     out = {"method": f"bootstrap: {options.resamples} refits of both matches on {n['workpiece']} + {n['reference']} "
-                     f"resampled points from nudged starts, {UNCERTAINTY_FACTOR:g} x the RMS displacement combined with "
+                     f"resampled points from nudged starts, {BOOTSTRAP.factor:g} x the RMS displacement combined with "
                      "how far a pose centred between edges can be off (a uniform error within it)",
-           "rotation_bound_deg": float(UNCERTAINTY_FACTOR * np.sqrt(np.mean(np.square(rotations))))}
+           "rotation_bound_deg": float(BOOTSTRAP.factor * np.sqrt(np.mean(np.square(rotations))))}
     for key, total in spread.items():
         bias = edge_bias(matches, W, targets[key])
         # Three standard uncertainties: the refits' spread, and the bias as an error anywhere within +-bias
         # (a uniform one's standard uncertainty is bias / sqrt(3)); alone, the bias is covered whole.
-        per_point = UNCERTAINTY_FACTOR * np.sqrt(total / options.resamples + bias ** 2 / 3)
+        per_point = BOOTSTRAP.factor * np.sqrt(total / options.resamples + bias ** 2 / 3)
         out[f"{key}_bound_mm"] = float(per_point.max())
         out[f"{key}_median_mm"] = float(np.median(per_point))
         out[f"{key}_edge_bias_mm"] = float(bias.max())
@@ -485,12 +512,12 @@ def edge_bias(matches, W: np.ndarray, points_X: np.ndarray) -> np.ndarray:
 
 def _distortion(scan, regions, surfaces, matches, toolpath_points, options) -> dict:
     """The scan's strain against the models and the shift of W it causes (distortion.distortion), on as
-    many points of each region as tell a strain that matters from its fit's noise (DISTORTION_POINTS)."""
+    many points of each region as tell a strain that matters from its fit's noise (DISTORTION_SAMPLING.points)."""
     rng = np.random.default_rng(options.seed)
     points = []
     for idx, m in zip((regions["workpiece"], regions["reference"]), matches):
-        noise_factor = (m.rms_mm / DISTORTION_RMS_MM) ** 2 if np.isfinite(m.rms_mm) else np.inf
-        n = int(min(MatchOptions.max_fine_points, np.ceil(DISTORTION_POINTS * max(noise_factor, 1.0))))
+        noise_factor = (m.rms_mm / DISTORTION_SAMPLING.rms_mm) ** 2 if np.isfinite(m.rms_mm) else np.inf
+        n = int(min(MatchOptions.max_fine_points, np.ceil(DISTORTION_SAMPLING.points * max(noise_factor, 1.0))))
         points.append(scan.points[pointops.random_subset(idx, n, rng)])
     targets = surfaces[0].points if toolpath_points is None else toolpath_points
     # Each gate the widest of its match's own (every point the match was finished on stays), twice the
@@ -510,7 +537,7 @@ def _refit_pose(points: np.ndarray, surface: SurfaceModel, start: np.ndarray, ga
     if options.method != "robust":
         return match_pose(Cloud(points, name="resample"), surface, start, **match_options)
     rng = np.random.default_rng(options.seed)
-    medium = pointops.random_subset(points, MEDIUM_POINTS, rng)
+    medium = pointops.random_subset(points, REFINE.medium_points, rng)
     state = coarse_to_fine([medium], surface, frames.invert(start), gate, surface.spacing)
     return frames.invert(refine_given(state, medium, points, surface, options.tolerance_mm).T)
 
@@ -538,13 +565,13 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
                       "passed": m.status == OK, "unit": ""})
         gates.append({"code": f"{role}_{RMS}", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
                       "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})
-        share = MIN_WITHIN_TOLERANCE_PCT[role]
+        share = LOCATE.min_within_tolerance_pct[role]
         gates.append({"code": f"{role}_{WITHIN_TOLERANCE}", "name": f"{role} points within tolerance",
                       "value": m.within_tolerance_pct, "limit": share, "passed": bool(m.within_tolerance_pct >= share),
                       "unit": "%"})
         gates.append({"code": f"{role}_explained", "name": f"{role} region explained by its model",
-                      "value": round(100 * m.fitness, EXPLAINED_DIGITS), "limit": 100 * MIN_FITNESS[role],
-                      "passed": bool(m.fitness >= MIN_FITNESS[role]), "unit": "%",
+                      "value": round(100 * m.fitness, EXPLAINED_DIGITS), "limit": 100 * LOCATE.min_fitness[role],
+                      "passed": bool(m.fitness >= LOCATE.min_fitness[role]), "unit": "%",
                       "why": unexplained[role].said(role)})
     key = "toolpath_bound_mm" if "toolpath_bound_mm" in uncertainty else "surface_bound_mm"
     where = "toolpath" if key.startswith("toolpath") else "workpiece surface"

@@ -7,10 +7,10 @@ region: W moves by about the distortion times their distance (0.5 % of 300 mm is
 wrong pose.  So the distortion is measured: one symmetric strain for the whole scan (its turning part is
 a rigid motion, harmless), fitted with one small rigid motion per region by point-to-plane least squares
 (Tukey-weighted), on the points near their models (every point a match was finished on among them),
-linearised at the final poses and again where each step leaves the points (ITERATIONS).  What each
+linearised at the final poses and again where each step leaves the points (FIT.iterations).  What each
 region's rigid motion takes up of that strain, differenced between the two regions at the toolpath, is
 how far W moves.  Noise must not read as strain: near a block's edges it reads one-sided whichever
-plane a point is measured against, so on meshes those points are left out (EDGE_DEG); and each point's
+plane a point is measured against, so on meshes those points are left out (FIT.edge_deg); and each point's
 lever is its foot on its face, not the point, whose noise moves lever and residual together
 (_linearised).  What the check reads on distorted and on clean scenes: docs/tuning.md.
 
@@ -20,20 +20,22 @@ scale) only the workpiece can tell, and its strain may be the scanner's or its o
 from its model often enough (clay, a casting; a real range scan against a model zippered from several),
 and that does not move W.  So the workpiece's strain there counts only where
 both objects agree that the scan is strained: the reference reads a strain along what it shows and the
-workpiece reads the same there (within OWN_STRAIN).  Otherwise it is taken as the part's own, and the
+workpiece reads the same there (within WHOSE.agreement).  Otherwise it is taken as the part's own, and the
 calibration warns with the reading and how far it would move W were it the scanner's
 (``shift_if_scanner_mm``): only a reference that shows that strain can tell.
 
 The scale and the strains that keep the volume count only along the directions the points show them
-in (SHOWN_MM): a small part beside a reference of flat faces leaves some stretches and
+in (READING.shown_mm): a small part beside a reference of flat faces leaves some stretches and
 shears nearly rigid on both, and along those the fit would read a percent of strain out of the models'
 and the sensor's micrometres.  A strain no point shows is not found: the check is blind to it, as every
-fit is.  Nor is a strain within the noise of its own fit (SIGNIFICANCE).
+fit is.  Nor is a strain within the noise of its own fit (READING.significance).
 
 Only the calibration can see a distortion: a lone match has no second region for it to move against,
 its pose is the best rigid fit of a scan of another size.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import chdtri
@@ -52,33 +54,58 @@ STRAIN_BASIS = np.array([[1 / _R3, 1 / _R3, 1 / _R3, 0, 0, 0],
                          [0, 0, 0, 1 / _R2, 0, 0],
                          [0, 0, 0, 0, 1 / _R2, 0],
                          [0, 0, 0, 0, 0, 1 / _R2]]).T
-# A direction of strain counts when a unit strain along it, after the best rigid motion of each region,
-# moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.
-SHOWN_MM = 5.0
-# A scale's information below this share of a shown direction's is rounding: none to free (_strain).
-SCALE_ROUNDING = 1e-9
-# Tukey's biweight: a point weighs nothing beyond this many robust scales of its region, since mixed pixels
-# and multipath along a silhouette lie off the surface on one side and, weighed fully, read as the scan growing.
-TUKEY_SCALES = 4.685
-REWEIGHTS = 3
-# A strain counts when the squares it explains are beyond this quantile of what noise explains (chi-square):
-# noise alone must not read as a strain.
-SIGNIFICANCE = 0.999
-# A workpiece whose strain along the reference's differs from what the reference reads by more than this
-# (unit-size strain) differs from its model: a scanner's strain reads alike on both objects.
-OWN_STRAIN = 5e-4
-# A part differs from its model by a few tenths of a percent over the whole (unit-size strain), not by this:
-# a workpiece reading more is taken as the scanner, or a large scale would pass as the part's own.
-OWN_LIMIT = 0.015
-# The fit is linearised where the points lie, at most this many times, each where the strain found so far
-# leaves them, until a step is below SETTLED (unit-size strain: 3 um over 300 mm): once reads a large strain short.
-ITERATIONS = 4
-SETTLED = 1e-5
-# On a mesh, a point counts only where the faces nearest a gate inside and outside its foot turn less than this
-# from its face or its back (a thin wall): near an edge, noise pushes points nearer the side face, reading short.
-EDGE_DEG = 30.0
-# A region with fewer points near its model than this shows no strain.
-MIN_POINTS = 50
+@dataclass(frozen=True)
+class ReadingSettings:
+    """Which strains the check reads: those the points show, beyond the noise of its fit."""
+
+    # A direction of strain counts when a unit strain along it, after the best rigid motion of each region,
+    # moves the points off their models by at least this RMS (mm): 5 um for a 0.1 % strain.
+    shown_mm: float = 5.0
+    # A scale's information below this share of a shown direction's is rounding: none to free (_strain).
+    scale_rounding: float = 1e-9
+    # A strain counts when the squares it explains are beyond this quantile of what noise explains (chi-square):
+    # noise alone must not read as a strain.
+    significance: float = 0.999
+
+
+READING = ReadingSettings()
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """The strain's fit: its robust weights, its linearisations, the points it is made on."""
+
+    # Tukey's biweight: a point weighs nothing beyond this many robust scales of its region, since mixed pixels
+    # and multipath along a silhouette lie off the surface on one side and, weighed fully, read as the scan growing.
+    tukey_scales: float = 4.685
+    reweights: int = 3
+    # The fit is linearised where the points lie, at most this many times, each where the strain found so far leaves
+    # them, until a step is below ``settled`` (unit-size strain: 3 um over 300 mm): once reads a large strain short.
+    iterations: int = 4
+    settled: float = 1e-5
+    # On a mesh, a point counts only where the faces nearest a gate inside and outside its foot turn less than this
+    # from its face or its back (a thin wall): near an edge, noise pushes points nearer the side face, reading short.
+    edge_deg: float = 30.0
+    # A region with fewer points near its model than this shows no strain.
+    min_points: int = 50
+
+
+FIT = FitSettings()
+
+
+@dataclass(frozen=True)
+class WhoseSettings:
+    """Whose strain it is: the scanner's, or the workpiece's own (it differs from its model)."""
+
+    # A workpiece whose strain along the reference's differs from what the reference reads by more than this
+    # (unit-size strain) differs from its model: a scanner's strain reads alike on both objects.
+    agreement: float = 5e-4
+    # A part differs from its model by a few tenths of a percent over the whole (unit-size strain), not by this:
+    # a workpiece reading more is taken as the scanner, or a large scale would pass as the part's own.
+    own_limit: float = 0.015
+
+
+WHOSE = WhoseSettings()
 
 
 def distortion(regions, surfaces, poses, targets: np.ndarray, gates) -> dict:
@@ -89,17 +116,17 @@ def distortion(regions, surfaces, poses, targets: np.ndarray, gates) -> dict:
     """
     centre = np.mean(np.concatenate(regions), axis=0)
     total, as_scanned, own = np.zeros(len(STRAIN_COMPONENTS)), None, None
-    for _ in range(ITERATIONS):
+    for _ in range(FIT.iterations):
         blocks = [_linearised(points, surface, pose, gate, centre)
                   for points, surface, pose, gate in zip(regions, surfaces, poses, gates)]
-        if min(len(residuals) for residuals, _, _ in blocks) < MIN_POINTS:
+        if min(len(residuals) for residuals, _, _ in blocks) < FIT.min_points:
             break
         # Whose strain it is, is told on the points as scanned; the steps after it refine that strain.
         step, own, on_workpiece, weights, not_shown = _step(blocks, own)
         if as_scanned is None:  # what the matches took up, they took up of the points as scanned
             as_scanned, as_read, unverified = (blocks, weights), on_workpiece, (not_shown if own else 0)
         total += step
-        if np.linalg.norm(step) < SETTLED:
+        if np.linalg.norm(step) < FIT.settled:
             break
         # Undone so far: the next step is linearised where the points now lie, nearer their models.
         regions = [points + _displacement(points - centre, step, _rigid(rigid, -(residuals + strains @ step), w))
@@ -138,13 +165,13 @@ def _step(blocks, own: bool | None = None):
     # when both objects agree that the scan is strained (the reference reads a strain along what it shows,
     # and the workpiece the same there); else it differs from its model (a clay, a real range scan), and
     # its strain is its own.
-    # A strain beyond OWN_LIMIT is no part's own, and the reference's reading of it may be cut short (its
+    # A strain beyond WHOSE.own_limit is no part's own, and the reference's reading of it may be cut short (its
     # ends beyond the gates): the whole scan's reading counts.
-    if np.linalg.norm(on_workpiece) > OWN_LIMIT:
+    if np.linalg.norm(on_workpiece) > WHOSE.own_limit:
         return on_both, False, on_workpiece, weights, not_shown
     if own is None:
         own = not (np.linalg.norm(shown.T @ on_reference) > 0
-                   and _disagree(on_workpiece, blocks[1:], reference_weights, shown) <= OWN_STRAIN)
+                   and _disagree(on_workpiece, blocks[1:], reference_weights, shown) <= WHOSE.agreement)
     step = shown @ (shown.T @ on_reference) + (0 if own else not_shown)
     return step, own, on_workpiece, weights, not_shown
 
@@ -166,14 +193,14 @@ def _measured(blocks):
     """The strain (STRAIN_BASIS coefficients) the regions' points show, the directions it was measured
     along (orthonormal columns) and the points' final weights; none when within the noise of its fit."""
     weights = [np.ones(len(residuals)) for residuals, _, _ in blocks]
-    for round_ in range(REWEIGHTS + 1):
+    for round_ in range(FIT.reweights + 1):
         coefficients, explained, directions = _strain(blocks, weights)
         left = [_left(block, coefficients, w) for block, w in zip(blocks, weights)]
-        if round_ < REWEIGHTS:
+        if round_ < FIT.reweights:
             weights = [_biweights(e) for e in left]
     weight, residuals = np.concatenate(weights), np.concatenate(left)
     noise = np.sum(weight * residuals ** 2) / max(np.sum(weight) - 6 * (len(blocks) + 1), 1.0)
-    if not explained > noise * chdtri(max(directions.shape[1], 1), 1 - SIGNIFICANCE):  # chi-square quantile
+    if not explained > noise * chdtri(max(directions.shape[1], 1), 1 - READING.significance):  # chi-square quantile
         coefficients = np.zeros(len(STRAIN_COMPONENTS))
     return coefficients, directions, weights
 
@@ -206,7 +233,7 @@ def _information(blocks, weights) -> tuple[np.ndarray, np.ndarray, float]:
 
 def _strain(blocks, weights) -> tuple[np.ndarray, float, np.ndarray]:
     """The strain (STRAIN_BASIS coefficients) that with a rigid motion per region best undoes the
-    residuals, within the scale and the volume-keeping directions the points show (SHOWN_MM); the
+    residuals, within the scale and the volume-keeping directions the points show (READING.shown_mm); the
     weighted squares it explains, and those directions."""
     information, gradient, total = _information(blocks, weights)
     if not total > 0:  # every point weighs nothing: nothing to measure
@@ -214,14 +241,14 @@ def _strain(blocks, weights) -> tuple[np.ndarray, float, np.ndarray]:
     scale, volume = information[0, 0], information[1:, 1:]
     # The volume-keeping strains with the scale free; none to free when the regions' motions take it up
     # whole (one face seen: its information is zero but for rounding, and so are its cross terms).
-    if scale > SCALE_ROUNDING * SHOWN_MM ** 2 * total:
+    if scale > READING.scale_rounding * READING.shown_mm ** 2 * total:
         volume = volume - np.outer(information[1:, 0], information[0, 1:]) / scale
     values, vectors = np.linalg.eigh(volume)
-    shown = np.sqrt(np.maximum(values, 0.0) / total) >= SHOWN_MM
+    shown = np.sqrt(np.maximum(values, 0.0) / total) >= READING.shown_mm
     directions = np.zeros((6, 1 + shown.sum()))
     directions[0, 0] = 1.0
     directions[1:, 1:] = vectors[:, shown]
-    if not np.sqrt(max(scale, 0.0) / total) >= SHOWN_MM:
+    if not np.sqrt(max(scale, 0.0) / total) >= READING.shown_mm:
         directions = directions[:, 1:]
     reduced = directions.T @ information @ directions
     coefficients = _solve(reduced, directions.T @ gradient)
@@ -248,7 +275,7 @@ def _solve(matrix: np.ndarray, right: np.ndarray) -> np.ndarray:
 def _biweights(residuals: np.ndarray) -> np.ndarray:
     """Tukey's biweight of each residual of one region, on the region's robust scale."""
     scale = MAD_TO_SIGMA * np.median(np.abs(residuals - np.median(residuals)))
-    u = residuals / (TUKEY_SCALES * scale) if scale > 0 else np.zeros(len(residuals))
+    u = residuals / (FIT.tukey_scales * scale) if scale > 0 else np.zeros(len(residuals))
     return np.where(np.abs(u) < 1, (1 - u ** 2) ** 2, 0.0)
 
 
@@ -256,14 +283,14 @@ def _linearised(points: np.ndarray, surface: SurfaceModel, pose: np.ndarray, gat
     """Point-to-plane residuals of the points within ``gate`` of their model at ``pose``, and their
     derivatives (in the scan's frame, about ``centre``) by the strains of STRAIN_BASIS and by a small
     rigid motion.  On a mesh, each point against its exact closest face, away from the face's edges
-    (EDGE_DEG): near an edge the noise is read short on one side (a point pushed into a block near its
+    (FIT.edge_deg): near an edge the noise is read short on one side (a point pushed into a block near its
     edge is nearer the side face) or on a face not its own.  A point model has only its samples' tangent
     planes; the nearest sample may lie up to a spacing beside a point's foot."""
     in_model = frames.apply(frames.invert(pose), points)
     if surface.is_mesh:
         feet, normals = surface.closest_points(in_model)
         near = np.flatnonzero(np.linalg.norm(in_model - feet, axis=1) <= gate)  # not NaN (a point not finite)
-        alike = np.cos(np.radians(EDGE_DEG))
+        alike = np.cos(np.radians(FIT.edge_deg))
         for side in (-gate, gate):  # the faces nearest a gate inside and outside the foot: its face or its back
             _, beside = surface.closest_points(feet[near] + side * normals[near])
             near = near[np.abs(np.einsum("ij,ij->i", beside, normals[near])) >= alike]

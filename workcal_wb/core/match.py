@@ -17,10 +17,10 @@ motion, and no rival is within the statistical noise of its evidence (given the 
 cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
 The verdict's best has its near-symmetric turns tried again, each refined exactly like it
 (Judge._with_turns): one of them is the right pose when the search handed over a flip, and only
-such a turn, as converged as the best and with both fitting within FAR_OFF_FIT noises, is no rival
+such a turn, as converged as the best and with both fitting within FAR_OFF.fit noises, is no rival
 when it leaves significantly more points far off (or takes the best's place when it leaves
 significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home),
-unless it misses the scan by more than HOPELESS_FIT times the verdict's limit (nor is such a pose
+unless it misses the scan by more than REFINE.hopeless_fit times the verdict's limit (nor is such a pose
 taken to the exact surface: a wrong model's poses are all such, and are failed in seconds); a
 model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
 symmetry.  Otherwise the match fails or is ambiguous and says why.
@@ -75,140 +75,242 @@ class MatchOptions:
     min_fitness: float = 0.1  # fraction of the scan's points that must lie on the model
     min_coverage: float = 0.05  # fraction of the model surface that must be seen
     # Whether "ok" asks the RMS and the share within the tolerance that a calibration asks of a region
-    # (MIN_WITHIN_TOLERANCE_PCT); a calibration's own matches leave it to its gates, which ask it after
+    # (VERDICT.min_within_tolerance_pct); a calibration's own matches leave it to its gates, which ask it after
     # the scan's distortion has been read (a scaled scan misfits, and says why there).
     tolerance_gates: bool = True
-    max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT_POINTS)
+    max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT.points)
     seed: int = 0
     blas_threads: int | None = 1  # OpenBLAS threads while matching (pointops.blas_threads); None: leave them
 
-# RANSAC poses kept by their votes, the distinct ones of them checked against the geometry, on at
-# most this many coarse scan points.
-RANSAC_KEPT, RANSAC_VERIFIED, VERIFY_POINTS = 200, 30, 600
-# Fewest coarse points worth describing by features, and how much finer than the default grid
-# the global search may go to get them.
-MIN_COARSE_POINTS, MAX_VOXEL_REFINEMENT = 350, 2.0
-# RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
-# much as the best; the half turns of a symmetric model are also tried after refinement).
-CANDIDATE_FLOOR = 0.7
-# The best this many of them by that check are first taken QUICK_ITERATIONS steps towards the scan and
-# checked again, and the best ``MatchOptions.candidates`` of those are refined in full: a rough pose's
-# score says little of where it settles (an L-block seen low from its outer side ranks its right pose
-# behind many wrong turns until each has taken a few steps).
-PRE_REFINED, QUICK_ITERATIONS = 12, 10
-# Two hypotheses are one pose unless they differ by more than this turn (deg) or this share of the model
-# diagonal at the scan's centre; refined poses, by the finer pair.
-HYPOTHESES_APART, REFINED_APART = (15.0, 0.1), (5.0, 0.05)
-# A search whose best pose does not fit the scan within the verdict's limit is run once more with
-# this many times the RANSAC hypotheses.
-RETRY_SAMPLES = 5
-# Steps of the final robust pass on all the fine points, from a pose already within their noise.
-POLISH_ITERATIONS = 2
-# The verdict refines the best pose again from this many times its final gate, on this many points,
-# when at least MISFIT_SHARE of its view cells show it a little off (see Judge.rank).
-WIDER_GATE, WIDER_POINTS, MISFIT_SHARE = 8.0, 500, 0.01
-# Patches the scan's noise is measured on, points the statistics of the verdict are taken over (a
-# random subset: percentages to about half a percent), and points poses are weighed on (a few per
-# view cell) unless the call is close (see Judge._level).
-NOISE_PROBES, VERDICT_POINTS, EVIDENCE_POINTS = 300, 10000, 5000
-# Model samples a view is rendered from: quickly, and for a close call (within CLOSE_CALL times the
-# rival significance).
-VIEW_SAMPLES, VIEW_SAMPLES_FINE, CLOSE_CALL = 6000, 24000, 2.0
-# Points of the middle refinement stage, where the gate shrinks: enough to average the noise.
-MEDIUM_POINTS = 3000
-# Global candidates and near-symmetric turns scoring below this fraction of the best are not
-# refined further: after the coarse stage they cannot come close to it.  Turns are scored on this
-# many points, and refined from this share of the model's diagonal (a turn about an axis a little off
-# lands that far from its home).
-RIVAL_FLOOR, TURN_POINTS, TURN_GATE = 0.6, 1000, 0.25
-# Turns that start within this angle (deg) and share of the diagonal of each other are refined as one
-# (from TURN_GATE they end as one), first on QUICK_TURN_POINTS; a refined turn is a rival only when it
-# explains at least TURN_FLOOR of what the best explains at its gate and its residual scale is at most
-# TURN_SIGMAS times the best's (a converged pose that leaves more unexplained, or fits that much worse,
-# is many standard errors behind by the view).
-TURNS_APART, QUICK_TURN_POINTS, TURN_FLOOR, TURN_SIGMAS = (10.0, 0.1), 300, 0.85, 3.0
-# A placed model must explain the scan to within its own noise: the robust residual scale may be
-# at most this many times the scan's noise (from local quadric fits) plus the tolerance.
-MAX_NOISE_RATIO = 3.0
-# A match is "ok" only when at least this share (%) of its matched points lies within the tolerance,
-# as a calibration's workpiece region must (the reference must have more: regions).
-MIN_WITHIN_TOLERANCE_PCT = 50.0
-# Points that scatter about local quadric fits by more than this fraction of the fit's radius
-# are a volume, not a surface (surface scans, noisy sparse ones included, scatter far less).
-MAX_SCATTER = 0.3
-# The view evidence: a scan point counts fully on the model surface and nothing at EVIDENCE_SIGMAS
-# times the residual scale (the larger of the best pose's and the scan's and model's own noise).
-EVIDENCE_SIGMAS = 3.0
-# The far-off test (far_off_test): a scan point counts against a pose from EVIDENCE_SIGMAS residual scales
-# off its surface, fully from this many (further off is no further evidence: an outlier is an outlier).
-FAR_OFF_SIGMAS = 10.0
-# Up to this many points differing between two poses, the far-off test's chance is exact (all 2^n
-# sign patterns, their weights on a grid of 1/SIGN_FLIP_STEPS: sign_flip_z); beyond, its normal approximation.
-EXACT_SIGN_FLIPS, SIGN_FLIP_STEPS = 64, 256
-# The far-off test rules out a turn of the best only when the best's residual scale is at most this many
-# times the noise: right poses fit within it, a pose slid along a curved part (held by a few points) does not.
-FAR_OFF_FIT = 2.0
-# A pose fitting worse than FAR_OFF_FIT noises may rest in a local minimum a slide from home (a curved tile
-# turned along its curve): it is refined again from these shifts (mm RMS over its matched points) either way
-# along each motion of its fit, and the best of those replaces it when its residual scale is at most HOME_GAIN
-# times its own.
-HOME_SHIFTS_MM, HOME_GAIN = (2.0, 3.0), 0.5
-# A pose missing the verdict's limit (MAX_NOISE_RATIO noises plus the tolerance) by more than this factor is
-# no slide from fitting: it is neither slid home nor taken to the exact surface (costly on a mesh).
-HOPELESS_FIT = 2.0
-# View pixels: at least this many spacings of the verdict's scan points, and of the model's view
-# samples (so a surface covers its pixels), and no more than MAX_VIEW_PIXELS over the scan.
-PIXEL_SCAN_SPACINGS, PIXEL_MODEL_SPACINGS, MAX_VIEW_PIXELS = 1.25, 2.0, 8000
-# Least variance of one view cell's evidence difference between two poses (model and scan sampling):
-# a difference of under about 3 % of the cells is never significant.
-CELL_VARIANCE_FLOOR = 0.01
-# An estimated viewpoint sits this many scan extents from the matched points, along their mean
-# normal; when more than MAX_FACING_AWAY of them face away from it, the scan was not taken from one
-# viewpoint (merged views) and the verdict falls back to scan points without visibility.
-VIEW_DISTANCE_EXTENTS, MAX_FACING_AWAY = 3.0, 0.2
-# A model face in the support's plane rests on it when its normal is within 60 deg of pointing into it.
-RESTING_COS = 0.5
-# Before a pose is failed for contradicting the view, the view is tried again from an estimated
-# viewpoint turned by this angle and twice it (see Judge.least_contradicted).
-SETTLE_STEP_DEG = 15.0
-# A pose contradicting more than this share of its view (scan points it would hide, surface it
-# should show missing) leaves a large part of the scan unexplained: the match fails.  When the
-# scanned surface goes on past its outline along more than MAX_CONTINUED of it, the outline may be
-# misplaced (or another object lies flush with the part): the match is ambiguous.
-MAX_CONTRADICTED, MAX_CONTINUED = 0.1, 0.03
-# prepare fills the cell grids of the first PREPARED_LEVELS levels: gates up to 2 x GATE_CELLS sample
-# spacings, 3 coarse voxels at the default voxel.
-PREPARED_LEVELS = 2
-# A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
-# MAX_CONTINUED_POINTS of the verdict's points (and at least MIN_CONTINUED_POINTS) make it ambiguous.
-MAX_CONTINUED_POINTS, MIN_CONTINUED_POINTS = 0.03, 10
-# A placed model may reach this many tolerances through the plane its scan's other points stand on (a table
-# wider than the model, _depth_through_support): right poses stay within it, shells slid along their bend do not.
-SUPPORT_TOLERANCES = 3.0
-# A face is flat where its samples' normals agree over CONTINUED_FLAT_SPACINGS model spacings (its edge
-# band is that wide); points beside it lie within CONTINUED_REACH_SPACINGS scan spacings of the mesh
-# (a sparse scan's first point past an edge) and at most CONTINUED_REACH_SAMPLES model spacings, each
-# weighed against its CONTINUED_SAMPLES nearest samples there, for at most CONTINUED_SEEDS points (a
-# scan far sparser than the model asked for millions of pairs); runs of points in a plane are joined
-# across gaps of CONTINUED_LINK_SPACINGS scan spacings.  A face faces the sensor when its normal is
-# within 84 deg of the direction to it (a side face seen grazing counts; the view's own test,
-# visibility.FACING_COS, lets samples a little past grazing into the z-buffer).
-CONTINUED_FLAT_SPACINGS, CONTINUED_REACH_SPACINGS, CONTINUED_REACH_SAMPLES, CONTINUED_LINK_SPACINGS = 2.0, 3.0, 12.0, 4.0
-CONTINUED_FACING_COS, CONTINUED_PLANES, CONTINUED_SEEDS, CONTINUED_SAMPLES = 0.1, 8, 200, 256
-# A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its wall across
-# (SurfaceModel.wall_across) is thinner than THIN_PART of its diagonal, below solid bodies' and above shells';
-# the wall behind a scan is then measured where it lies, and is a wall up to THIN_WALL_DIAGONALS.
-THIN_PART, THIN_WALL_DIAGONALS = 0.08, 0.25
-# Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
-# shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
-THIN_WALL_NOISES = 5.0
-# The fits leave out the support's points within this many noises of its plane (and within its band): the
-# table's scatter, but not more of a low part's own sides (a plate's), which hold its turn in the plane.
-SUPPORT_BAND_NOISES = 2.5
-# A pose whose outline, seen from the sensor, holds more than this share of scan pixels whose points
-# lie behind its surface, inside the part (within OFF_BAND_GATES evidence gates: further behind they
-# are hidden, a contradiction), leaves a large share of the scan unexplained: ambiguous.
-MAX_OFF, OFF_BAND_GATES = 0.1, 10.0
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """The global search: RANSAC's hypotheses, the candidates refined from them, the retry."""
+
+    # RANSAC poses kept by their votes, the distinct ones of them checked against the geometry, on at
+    # most this many coarse scan points.
+    ransac_kept: int = 200
+    ransac_verified: int = 30
+    verify_points: int = 600
+    # Fewest coarse points worth describing by features, and how much finer than the default grid
+    # the global search may go to get them.
+    min_coarse_points: int = 350
+    max_voxel_refinement: float = 2.0
+    # RANSAC poses verified within this fraction of the best are refined (a symmetric twin scores as
+    # much as the best; the half turns of a symmetric model are also tried after refinement).
+    candidate_floor: float = 0.7
+    # The best this many of them by that check are first taken quick_iterations steps towards the scan and
+    # checked again, and the best ``MatchOptions.candidates`` of those are refined in full: a rough pose's
+    # score says little of where it settles (an L-block seen low from its outer side ranks its right pose
+    # behind many wrong turns until each has taken a few steps).
+    pre_refined: int = 12
+    quick_iterations: int = 10
+    # Two hypotheses are one pose unless they differ by more than this turn (deg) or this share of the model
+    # diagonal at the scan's centre; refined poses, by the finer pair.
+    hypotheses_apart: tuple = (15.0, 0.1)
+    refined_apart: tuple = (5.0, 0.05)
+    # A search whose best pose does not fit the scan within the verdict's limit is run once more with
+    # this many times the RANSAC hypotheses.
+    retry_samples: int = 5
+
+
+SEARCH = SearchSettings()
+
+
+@dataclass(frozen=True)
+class RefineSettings:
+    """Refinement: the points it runs on, the final polish, the widened gate and the slide home."""
+
+    # Points of the middle refinement stage, where the gate shrinks: enough to average the noise.
+    medium_points: int = 3000
+    # Steps of the final robust pass on all the fine points, from a pose already within their noise.
+    polish_iterations: int = 2
+    # The verdict refines the best pose again from this many times its final gate, on this many points,
+    # when at least misfit_share of its view cells show it a little off (see Judge.rank).
+    wider_gate: float = 8.0
+    wider_points: int = 500
+    misfit_share: float = 0.01
+    # A pose fitting worse than FAR_OFF.fit noises may rest in a local minimum a slide from home (a curved tile
+    # turned along its curve): it is refined again from these shifts (mm RMS over its matched points) either way
+    # along each motion of its fit, and the best of those replaces it when its residual scale is at most home_gain
+    # times its own.
+    home_shifts_mm: tuple = (2.0, 3.0)
+    home_gain: float = 0.5
+    # A pose missing the verdict's limit (VERDICT.max_noise_ratio noises plus the tolerance) by more than this
+    # factor is no slide from fitting: it is neither slid home nor taken to the exact surface (costly on a mesh).
+    hopeless_fit: float = 2.0
+    # prepare fills the cell grids of the first prepared_levels levels: gates up to 2 x GATE_CELLS sample
+    # spacings, 3 coarse voxels at the default voxel.
+    prepared_levels: int = 2
+
+
+REFINE = RefineSettings()
+
+
+@dataclass(frozen=True)
+class VerdictSettings:
+    """The verdict: the scan's noise and the points it is judged on, and what "ok" asks of a pose."""
+
+    # Patches the scan's noise is measured on, points the statistics of the verdict are taken over (a
+    # random subset: percentages to about half a percent), and points poses are weighed on (a few per
+    # view cell) unless the call is close (see Judge._level).
+    noise_probes: int = 300
+    points: int = 10000
+    evidence_points: int = 5000
+    # A placed model must explain the scan to within its own noise: the robust residual scale may be
+    # at most this many times the scan's noise (from local quadric fits) plus the tolerance.
+    max_noise_ratio: float = 3.0
+    # A match is "ok" only when at least this share (%) of its matched points lies within the tolerance,
+    # as a calibration's workpiece region must (the reference must have more: regions).
+    min_within_tolerance_pct: float = 50.0
+    # Points that scatter about local quadric fits by more than this fraction of the fit's radius
+    # are a volume, not a surface (surface scans, noisy sparse ones included, scatter far less).
+    max_scatter: float = 0.3
+    # The view evidence: a scan point counts fully on the model surface and nothing at evidence_sigmas
+    # times the residual scale (the larger of the best pose's and the scan's and model's own noise).
+    evidence_sigmas: float = 3.0
+    # Least variance of one view cell's evidence difference between two poses (model and scan sampling):
+    # a difference of under about 3 % of the cells is never significant.
+    cell_variance_floor: float = 0.01
+    # A pose contradicting more than this share of its view (scan points it would hide, surface it
+    # should show missing) leaves a large part of the scan unexplained: the match fails.
+    max_contradicted: float = 0.1
+    # A part is thin (a plate, a shell: a scan of one face may be laid on the other) when its wall across
+    # (SurfaceModel.wall_across) is thinner than thin_part of its diagonal, below solid bodies' and above shells';
+    # the wall behind a scan is then measured where it lies, and is a wall up to thin_wall_diagonals.
+    thin_part: float = 0.08
+    thin_wall_diagonals: float = 0.25
+    # Where the wall the scan sees is thinner than this many times the noise, which of its faces the scan
+    # shows cannot be told (a thin plate or shell seen face-on through a noisy sensor): ambiguous.
+    thin_wall_noises: float = 5.0
+
+
+VERDICT = VerdictSettings()
+
+
+@dataclass(frozen=True)
+class RivalSettings:
+    """Rivals of the best pose: global candidates and the model's near-symmetric turns."""
+
+    # Global candidates and near-symmetric turns scoring below this fraction of the best are not
+    # refined further: after the coarse stage they cannot come close to it.  Turns are scored on this
+    # many points, and refined from this share of the model's diagonal (a turn about an axis a little off
+    # lands that far from its home).
+    floor: float = 0.6
+    turn_points: int = 1000
+    turn_gate: float = 0.25
+    # Turns that start within this angle (deg) and share of the diagonal of each other are refined as one
+    # (from turn_gate they end as one), first on quick_turn_points; a refined turn is a rival only when it
+    # explains at least turn_floor of what the best explains at its gate and its residual scale is at most
+    # turn_sigmas times the best's (a converged pose that leaves more unexplained, or fits that much worse,
+    # is many standard errors behind by the view).
+    turns_apart: tuple = (10.0, 0.1)
+    quick_turn_points: int = 300
+    turn_floor: float = 0.85
+    turn_sigmas: float = 3.0
+
+
+RIVALS = RivalSettings()
+
+
+@dataclass(frozen=True)
+class FarOffSettings:
+    """The far-off test (far_off_test): which of two poses leaves more scan points far off the part."""
+
+    # A scan point counts against a pose from VERDICT.evidence_sigmas residual scales off its surface, fully
+    # from this many (further off is no further evidence: an outlier is an outlier).
+    sigmas: float = 10.0
+    # Up to this many points differing between two poses, the far-off test's chance is exact (all 2^n
+    # sign patterns, their weights on a grid of 1/sign_flip_steps: sign_flip_z); beyond, its normal approximation.
+    exact_sign_flips: int = 64
+    sign_flip_steps: int = 256
+    # The far-off test rules out a turn of the best only when the best's residual scale is at most this many
+    # times the noise: right poses fit within it, a pose slid along a curved part (held by a few points) does not.
+    fit: float = 2.0
+
+
+FAR_OFF = FarOffSettings()
+
+
+@dataclass(frozen=True)
+class ViewSettings:
+    """The view: what the sensor should see of a placed model, from where, in how many pixels."""
+
+    # Model samples a view is rendered from: quickly, and for a close call (within close_call times the
+    # rival significance).
+    samples: int = 6000
+    samples_fine: int = 24000
+    close_call: float = 2.0
+    # View pixels: at least this many spacings of the verdict's scan points, and of the model's view
+    # samples (so a surface covers its pixels), and no more than max_pixels over the scan.
+    pixel_scan_spacings: float = 1.25
+    pixel_model_spacings: float = 2.0
+    max_pixels: int = 8000
+    # An estimated viewpoint sits this many scan extents from the matched points, along their mean
+    # normal; when more than max_facing_away of them face away from it, the scan was not taken from one
+    # viewpoint (merged views) and the verdict falls back to scan points without visibility.
+    distance_extents: float = 3.0
+    max_facing_away: float = 0.2
+    # Before a pose is failed for contradicting the view, the view is tried again from an estimated
+    # viewpoint turned by this angle and twice it (see Judge.least_contradicted).
+    settle_step_deg: float = 15.0
+
+
+VIEW = ViewSettings()
+
+
+@dataclass(frozen=True)
+class OutlineSettings:
+    """The outline: scanned surface going on past a placed model's faces, and points behind its surface."""
+
+    # When the scanned surface goes on past its outline along more than this share of it, the outline may be
+    # misplaced (or another object lies flush with the part): the match is ambiguous.
+    max_continued: float = 0.03
+    # A pose leaves scan points continuing a model face past its edge (Judge.continued_faces): more than
+    # max_continued_points of the verdict's points (and at least min_continued_points) make it ambiguous.
+    max_continued_points: float = 0.03
+    min_continued_points: int = 10
+    # A face is flat where its samples' normals agree over flat_spacings model spacings (its edge
+    # band is that wide); points beside it lie within reach_spacings scan spacings of the mesh
+    # (a sparse scan's first point past an edge) and at most reach_samples model spacings, each
+    # weighed against its ``samples`` nearest samples there, for at most ``seeds`` points (a
+    # scan far sparser than the model asked for millions of pairs); runs of points in a plane are joined
+    # across gaps of link_spacings scan spacings.  A face faces the sensor when its normal is
+    # within 84 deg of the direction to it (a side face seen grazing counts; the view's own test,
+    # visibility.FACING_COS, lets samples a little past grazing into the z-buffer).
+    flat_spacings: float = 2.0
+    reach_spacings: float = 3.0
+    reach_samples: float = 12.0
+    link_spacings: float = 4.0
+    facing_cos: float = 0.1
+    planes: int = 8
+    seeds: int = 200
+    samples: int = 256
+    # A pose whose outline, seen from the sensor, holds more than this share of scan pixels whose points
+    # lie behind its surface, inside the part (within off_band_gates evidence gates: further behind they
+    # are hidden, a contradiction), leaves a large share of the scan unexplained: ambiguous.
+    max_off: float = 0.1
+    off_band_gates: float = 10.0
+
+
+OUTLINE = OutlineSettings()
+
+
+@dataclass(frozen=True)
+class SupportSettings:
+    """The plane the part stands on: which model faces rest on it, how far a pose may reach through it."""
+
+    # A model face in the support's plane rests on it when its normal is within 60 deg of pointing into it.
+    resting_cos: float = 0.5
+    # A placed model may reach this many tolerances through the plane its scan's other points stand on (a table
+    # wider than the model, _depth_through_support): right poses stay within it, shells slid along their bend do not.
+    tolerances: float = 3.0
+    # The fits leave out the support's points within this many noises of its plane (and within its band): the
+    # table's scatter, but not more of a low part's own sides (a plate's), which hold its turn in the plane.
+    band_noises: float = 2.5
+
+
+SUPPORT = SupportSettings()
 
 
 def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOptions = MatchOptions(),
@@ -253,10 +355,10 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                            reasons=[Reason(SCAN_NOT_SOLID, f"{scan.name}: the scan points lie {SHAPE_WORDS[kind]}; "
                                                            "they cannot fix a pose")])
     fine = pointops.random_subset(scan.points, options.max_fine_points, rng)
-    medium = pointops.random_subset(fine, MEDIUM_POINTS, rng)
-    probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=NOISE_PROBES)
+    medium = pointops.random_subset(fine, REFINE.medium_points, rng)
+    probes, probe_noise, probe_radius = pointops.local_noise(medium, rng, probes=VERDICT.noise_probes)
     noise, patch = (float(np.median(probe_noise)), float(np.median(probe_radius))) if len(probes) else (np.inf, 0.0)
-    if not noise <= MAX_SCATTER * patch:
+    if not noise <= VERDICT.max_scatter * patch:
         return MatchResult(FAILED, matrix=None, time_s=timer.total(), **result,
                            reasons=[Reason(NOT_A_SURFACE, f"{scan.name}: the points do not lie on a surface (they "
                                                           f"scatter {noise:.2f} mm about local fits {patch:.2f} mm "
@@ -267,8 +369,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     # medium subset is sparser than the scan by the square root of their sizes (a surface).
     spacing = patch / 2 * np.sqrt(len(medium) / len(scan))
     voxel = options.coarse_voxel_mm or max(surface.diagonal / COARSE_VOXELS_PER_DIAGONAL, 1.5 * spacing)
-    fit_limit = MAX_NOISE_RATIO * noise + options.tolerance_mm  # the verdict's limit on the residual scale
-    hopeless = HOPELESS_FIT * fit_limit
+    fit_limit = VERDICT.max_noise_ratio * noise + options.tolerance_mm  # the verdict's limit on the residual scale
+    hopeless = REFINE.hopeless_fit * fit_limit
     if init is None:
         with timer("global search"):
             starts = _global_candidates(scan.points, surface, voxel, options, rng, min_voxel=1.5 * spacing)
@@ -282,12 +384,12 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         gate = voxel  # a guess may be off by a few millimetres
 
     pointops.hand_back_freed_heap()  # the global search's temporaries: refinement's would pile on them
-    sample, noise_points = fine[:VERDICT_POINTS], medium[probes]
+    sample, noise_points = fine[:VERDICT.points], medium[probes]
     support = (Support.given(sample, *options.support) if options.support is not None
                else Support.of(sample, voxel, surface.diagonal, options.seed))
     # The fits see the part, not what it stands on: the support's points by its foot would pull it
     # along the plane or tilt it.  The verdict weighs the whole scan, the support included.
-    band = SUPPORT_BAND_NOISES * noise
+    band = SUPPORT.band_noises * noise
     fine, medium = _off_support(fine, support, band), _off_support(medium, support, band)
     turned = {}  # pose (its bytes) -> its turns refined (_near_symmetric_turns): the verdict asks again for the best's
 
@@ -323,13 +425,13 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
         judge, chosen, ranking = judged(best, rivals)
     if init is None and not chosen.sigma <= fit_limit and judge.scan_noise <= options.tolerance_mm:
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
-        # sees little of the model).  Search once more, drawing RETRY_SAMPLES times as many
+        # sees little of the model).  Search once more, drawing SEARCH.retry_samples times as many
         # hypotheses (only such scans pay for it; not one noisier than the tolerance, which fails
         # whatever the pose).  When its best explains more scan points within the
         # limit, it is judged with its rivals, the first verdict's best and the first search's rivals
         # (one of them may be a flip of it); otherwise the first verdict stands, as without the second search.
         with timer("search again"):
-            more = replace(options, ransac_samples=RETRY_SAMPLES * options.ransac_samples)
+            more = replace(options, ransac_samples=SEARCH.retry_samples * options.ransac_samples)
             again = _global_candidates(scan.points, surface, voxel, more, rng, min_voxel=1.5 * spacing)
             if again:
                 retried, retried_rivals = _refine(options.method, again, medium, fine, surface, gate,
@@ -352,10 +454,10 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
     is made).  A batch of matches against one model then pays for it once;
     without it the same work is done lazily, a little in each match (seconds for ~100k samples)."""
     voxel = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
-    while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / MAX_VOXEL_REFINEMENT:
+    while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / SEARCH.max_voxel_refinement:
         surface.coarse(voxel)
         voxel /= 1.25
-    for level in range(PREPARED_LEVELS):
+    for level in range(REFINE.prepared_levels):
         surface.grid_level(level).precompute()
     pointops.hand_back_freed_heap()  # the building's temporaries: a kept model's process need not hold them
     return surface
@@ -408,9 +510,9 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
     their scores, best first."""
     coarse = global_search.coarse_points(points, voxel)
     # A small piece of the model (partial overlap) leaves too few coarse points to describe:
-    # refine the grid for it, down to MAX_VOXEL_REFINEMENT times finer but not below ``min_voxel``.
-    finest = max(min_voxel, voxel / MAX_VOXEL_REFINEMENT)
-    while len(coarse) < MIN_COARSE_POINTS and voxel / 1.25 >= finest:
+    # refine the grid for it, down to SEARCH.max_voxel_refinement times finer but not below ``min_voxel``.
+    finest = max(min_voxel, voxel / SEARCH.max_voxel_refinement)
+    while len(coarse) < SEARCH.min_coarse_points and voxel / 1.25 >= finest:
         voxel /= 1.25
         coarse = global_search.coarse_points(points, voxel)
     coarse = global_search.without_large_plane(coarse, voxel, surface.diagonal, rng)
@@ -422,23 +524,23 @@ def _global_candidates(points: np.ndarray, surface: SurfaceModel, voxel: float, 
     si, mi, side = global_search.feature_correspondences(features, model_features)
     poses, votes = global_search.ransac_poses(coarse[si], model_points[mi], side[:, None] * normals[si],
                                               model_normals[mi], 1.5 * voxel, rng, samples=options.ransac_samples,
-                                              keep=RANSAC_KEPT, min_edge=3 * voxel)
+                                              keep=SEARCH.ransac_kept, min_edge=3 * voxel)
     if len(poses) == 0:
         return []
-    probe = pointops.random_subset(coarse, VERIFY_POINTS, rng)
+    probe = pointops.random_subset(coarse, SEARCH.verify_points, rng)
     centre = probe.mean(axis=0)
     # Many hypotheses are near copies of the best one; a symmetric twin must not be crowded out.
-    angle, share = HYPOTHESES_APART
-    poses = poses[global_search.distinct(poses, votes, centre, angle, share * surface.diagonal, RANSAC_VERIFIED)]
+    angle, share = SEARCH.hypotheses_apart
+    poses = poses[global_search.distinct(poses, votes, centre, angle, share * surface.diagonal, SEARCH.ransac_verified)]
     verified = inlier_scores(probe, surface, poses, 1.5 * voxel)
     keep = [i for i in global_search.distinct(poses, verified, centre, angle, share * surface.diagonal)
-            if verified[i] >= CANDIDATE_FLOOR * verified.max()][:PRE_REFINED]
-    stepped = [refine(probe, surface, poses[i], 3 * voxel, voxel, QUICK_ITERATIONS, 1e-3).T for i in keep]
+            if verified[i] >= SEARCH.candidate_floor * verified.max()][:SEARCH.pre_refined]
+    stepped = [refine(probe, surface, poses[i], 3 * voxel, voxel, SEARCH.quick_iterations, 1e-3).T for i in keep]
     rescored = inlier_scores(probe, surface, stepped, voxel)
     keep = global_search.distinct(stepped, rescored, centre, angle, share * surface.diagonal, options.candidates)
     refined = [coarse_to_fine([probe], surface, stepped[i], 3 * voxel, voxel / 2).T for i in keep]
     scores = inlier_scores(probe, surface, refined, voxel)
-    angle, share = REFINED_APART
+    angle, share = SEARCH.refined_apart
     order = global_search.distinct(refined, scores, centre, angle, share * surface.diagonal)
     return [(refined[i], float(scores[i])) for i in order if scores[i] > 0]
 
@@ -448,19 +550,19 @@ def _refine(method: str, starts, medium: np.ndarray, fine: np.ndarray, surface: 
     """The best pose refined on all the fine points, and the distinct rivals refined on the medium
     ones (RefineStates, scan -> model).
 
-    Every start within RIVAL_FLOOR of the best coarse score is refined on the medium points first
+    Every start within RIVALS.floor of the best coarse score is refined on the medium points first
     and the winner is chosen at the tightest gate any of them reached: coarse scores of a wrong pose
     can tie with the right one, but only the right one brings the residuals down to the noise.
     The near-symmetric turns of the winner (``turns_of``: _near_symmetric_turns) are tried as rivals
     too.  ``hopeless``: see _polish.
     """
-    contenders = [T for T, score in starts if score >= RIVAL_FLOOR * starts[0][1]]
+    contenders = [T for T, score in starts if score >= RIVALS.floor * starts[0][1]]
     if len(contenders) == 1 and method != "robust":
         states = []
     else:
         states = [coarse_to_fine([medium], surface, T, gate, surface.spacing) for T in contenders]
         scores = inlier_scores(medium, surface, [s.T for s in states], min(s.gate for s in states))
-        angle, share = REFINED_APART
+        angle, share = SEARCH.refined_apart
         order = global_search.distinct([s.T for s in states], scores, medium.mean(axis=0), angle, share * surface.diagonal)
         contenders, states = [contenders[i] for i in order], [states[i] for i in order]
     if method == "robust":
@@ -480,8 +582,8 @@ def _polish(state, fine: np.ndarray, surface: SurfaceModel, tolerance: float, ho
     """A pose refined on the medium points, finished on all the fine ones.  When the robust fit
     leaves a motion nearly free against a mesh, it goes on against the exact surface and centres the
     pose between the edges that pin the motion (see edges), unless its residual scale is above
-    ``hopeless`` (HOPELESS_FIT: sub-spacing slack is no matter for a pose that misses the scan)."""
-    best = refine(fine, surface, state.T, state.gate, state.scale, POLISH_ITERATIONS)
+    ``hopeless`` (REFINE.hopeless_fit: sub-spacing slack is no matter for a pose that misses the scan)."""
+    best = refine(fine, surface, state.T, state.gate, state.scale, REFINE.polish_iterations)
     best.iterations += state.iterations
     if (surface.is_mesh and best.sigma <= hopeless
             and has_weak_motion(fine, surface, best.T, best.gate, best.scale)):
@@ -527,7 +629,7 @@ def _turns(best, medium: np.ndarray, surface: SurfaceModel, exact_halves: bool =
     turns of the matched patch about its own principal axes."""
     from .symmetry import principal_axes, turn
 
-    moved = frames.apply(best.T, medium[:TURN_POINTS])
+    moved = frames.apply(best.T, medium[:RIVALS.turn_points])
     on_model = surface.nearest_cell(moved, best.gate)[2]
     patch = moved[on_model] if on_model.sum() >= MIN_SCAN_POINTS else moved
     about = [principal_axes(patch, np.ones(len(patch)))]
@@ -540,47 +642,48 @@ def _turns(best, medium: np.ndarray, surface: SurfaceModel, exact_halves: bool =
 def _refined_turns(best, turned: np.ndarray, medium: np.ndarray, surface: SurfaceModel, gate: float,
                    fit_limit: float) -> list:
     """The ``turned`` poses (scan -> model) each refined, from the search's ``gate`` where it fits there,
-    else (or when that does not bring it home) from TURN_GATE of the model's diagonal (on TURN_POINTS,
+    else (or when that does not bring it home) from RIVALS.turn_gate of the model's diagonal (on RIVALS.turn_points,
     then on the medium points), and kept when it then explains the scan about as well as the best
-    (TURN_FLOOR of its score on TURN_POINTS at the best's gate, TURN_SIGMAS of its residual scale),
+    (RIVALS.turn_floor of its score on RIVALS.turn_points at the best's gate, RIVALS.turn_sigmas of its residual scale),
     distinct from the best and each other (RefineStates).  Judged after they are refined, every time: a
     turn about an axis a little off (a patch's principal axis, or a model whose legs differ in length)
     lands a centimetre or more from its home and scores as nothing there, and from the search's gate
     it would never slide home; yet from the wide gate a turn that lands home from the search's (a curved
     tile's flip) may settle elsewhere.  A best that does not fit the scan (its residual scale above
     ``fit_limit``, the verdict's) is no yardstick for that: its turns are refined from the search's gate
-    where they score RIVAL_FLOOR of it there (a flip the search handed over comes home so)."""
-    points = medium[:TURN_POINTS]
+    where they score RIVALS.floor of it there (a flip the search handed over comes home so)."""
+    points = medium[:RIVALS.turn_points]
     centre = medium.mean(axis=0)
     best_at_gate = inlier_scores(points, surface, [best.T], gate)[0]
     # Turns that start as one pose end as one (a flip and the exact half turn about the same axis): refine
     # each once.
     if not best.sigma <= fit_limit:
         scores = inlier_scores(points, surface, turned, gate)
-        starts = global_search.distinct(turned, scores, centre, TURNS_APART[0], TURNS_APART[1] * surface.diagonal)
+        starts = global_search.distinct(turned, scores, centre, RIVALS.turns_apart[0],
+                                        RIVALS.turns_apart[1] * surface.diagonal)
         states = [coarse_to_fine([medium], surface, turned[i], gate, surface.spacing)
-                  for i in starts if scores[i] >= RIVAL_FLOOR * best_at_gate]
+                  for i in starts if scores[i] >= RIVALS.floor * best_at_gate]
         return _apart_from(best, states, centre)
-    starts = global_search.distinct(turned, np.zeros(len(turned)), centre, TURNS_APART[0],
-                                    TURNS_APART[1] * surface.diagonal)
+    starts = global_search.distinct(turned, np.zeros(len(turned)), centre, RIVALS.turns_apart[0],
+                                    RIVALS.turns_apart[1] * surface.diagonal)
     best_score = inlier_scores(points, surface, [best.T], best.gate)[0]
 
     def as_well(state) -> bool:
-        return (inlier_scores(points, surface, [state.T], best.gate)[0] >= TURN_FLOOR * best_score
-                and not state.sigma > TURN_SIGMAS * best.sigma)
+        return (inlier_scores(points, surface, [state.T], best.gate)[0] >= RIVALS.turn_floor * best_score
+                and not state.sigma > RIVALS.turn_sigmas * best.sigma)
 
     # A turn that fits at the search's gate is refined from there (it lands home when the part maps onto
     # itself); one that does not, or does not come home, first on a few points from the wide gate: one that
     # then explains much less than the best cannot come close to it on more.
-    screened = (inlier_scores(points, surface, turned[starts], gate) >= RIVAL_FLOOR * best_at_gate if len(starts)
+    screened = (inlier_scores(points, surface, turned[starts], gate) >= RIVALS.floor * best_at_gate if len(starts)
                 else np.zeros(0, bool))
     states = []
     for i, fits in zip(starts, screened):
         state = coarse_to_fine([medium], surface, turned[i], gate, surface.spacing) if fits else None
         if state is None or not as_well(state):
-            quick = coarse_to_fine([medium[:QUICK_TURN_POINTS]], surface, turned[i], TURN_GATE * surface.diagonal,
-                                   surface.spacing)
-            if inlier_scores(points, surface, [quick.T], max(best.gate, quick.gate))[0] >= RIVAL_FLOOR * \
+            quick = coarse_to_fine([medium[:RIVALS.quick_turn_points]], surface, turned[i],
+                                   RIVALS.turn_gate * surface.diagonal, surface.spacing)
+            if inlier_scores(points, surface, [quick.T], max(best.gate, quick.gate))[0] >= RIVALS.floor * \
                     inlier_scores(points, surface, [best.T], max(best.gate, quick.gate))[0]:
                 state = coarse_to_fine([points, medium], surface, quick.T, quick.gate, surface.spacing)
         if state is not None and as_well(state):
@@ -598,27 +701,27 @@ def _apart_from(best, states: list, centre: np.ndarray) -> list:
 def _through_the_wall(state, medium: np.ndarray, surface: SurfaceModel, gate: float) -> list:
     """The pose shifted through the wall its scan lies on, onto the wall's other face, refined (a
     scan of one face of a thin plate or shell fits its back face nearly as well); [] without a wall."""
-    if not surface.wall_across < THIN_PART * surface.diagonal:
+    if not surface.wall_across < VERDICT.thin_part * surface.diagonal:
         return []  # no thin plate or shell: every wall is a body's
-    patch = frames.apply(state.T, medium[:TURN_POINTS])
+    patch = frames.apply(state.T, medium[:RIVALS.turn_points])
     _, idx, found = surface.nearest_cell(patch, state.gate)
     patch, idx = patch[found], idx[found]
     if len(patch) < MIN_SCAN_POINTS:
         return []
     normal = surface.normals[idx].sum(axis=0)
     normal /= max(np.linalg.norm(normal), 1e-12)
-    samples = surface.view_order[:VIEW_SAMPLES]
-    pixel = PIXEL_MODEL_SPACINGS * surface.spacing * np.sqrt(len(surface.points) / len(samples))
+    samples = surface.view_order[:VIEW.samples]
+    pixel = VIEW.pixel_model_spacings * surface.spacing * np.sqrt(len(surface.points) / len(samples))
     centre = patch.mean(axis=0)
     view = visibility.View(centre + surface.diagonal * normal, centre, pixel).framed(patch, margin=0)
     pixels, _ = view.pixels(patch)
     seen = visibility.median_wall_thickness(view, surface.points[samples], surface.normals[samples],
                                             pixels[pixels >= 0], MIN_SCAN_POINTS)
-    if not seen < THIN_WALL_DIAGONALS * surface.diagonal:
+    if not seen < VERDICT.thin_wall_diagonals * surface.diagonal:
         return []
     shifted = frames.rigid(translation=-seen * normal) @ state.T
-    scores = inlier_scores(medium[:TURN_POINTS], surface, [state.T, shifted], state.gate)
-    if scores[1] < RIVAL_FLOOR * scores[0]:  # a solid body, not a thin wall
+    scores = inlier_scores(medium[:RIVALS.turn_points], surface, [state.T, shifted], state.gate)
+    if scores[1] < RIVALS.floor * scores[0]:  # a solid body, not a thin wall
         return []
     return [coarse_to_fine([medium], surface, shifted, gate, surface.spacing)]
 
@@ -662,14 +765,14 @@ class Judge:
     def _level(self, fine: bool) -> None:
         """Weigh on a few scan points and a coarse view (quick), or on all the verdict's points and
         a view with cells about a scan spacing wide (to tell near-symmetric poses apart)."""
-        count = len(self.all_points) if fine else min(len(self.all_points), EVIDENCE_POINTS)
+        count = len(self.all_points) if fine else min(len(self.all_points), VERDICT.evidence_points)
         self.sample = self.all_points[:count]
         self.fine = fine
         spacing = self.all_spacing * np.sqrt(len(self.all_points) / count)
-        self.view_samples = self.surface.view_order[:VIEW_SAMPLES_FINE if fine else VIEW_SAMPLES]
+        self.view_samples = self.surface.view_order[:VIEW.samples_fine if fine else VIEW.samples]
         model_spacing = self.surface.spacing * np.sqrt(len(self.surface.points) / len(self.view_samples))
-        self.pixel = max(PIXEL_SCAN_SPACINGS * spacing, PIXEL_MODEL_SPACINGS * model_spacing,
-                         spacing * np.sqrt(count / MAX_VIEW_PIXELS))
+        self.pixel = max(VIEW.pixel_scan_spacings * spacing, VIEW.pixel_model_spacings * model_spacing,
+                         spacing * np.sqrt(count / VIEW.max_pixels))
         if self.viewpoint is not None:
             self.view = visibility.ScanView.of(self.sample, visibility.View(self.viewpoint, self.target, self.pixel))
 
@@ -703,13 +806,13 @@ class Judge:
         if self.options.method == "robust":
             best = home(best, self.noise)
         sigma = best.sigma if np.isfinite(best.sigma) else self.noise
-        self.gate = EVIDENCE_SIGMAS * max(sigma, self.noise, 1e-6)
+        self.gate = VERDICT.evidence_sigmas * max(sigma, self.noise, 1e-6)
         poses = [best] + rivals
         lookups = [self._lookup(p.T) for p in poses]
         self._choose_view(poses, lookups)
         weighed = [self.evidence(p.T, lookup) for p, lookup in zip(poses, lookups)]
-        if any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
-               < CLOSE_CALL * self.options.rival_significance for e in weighed[1:]):
+        if any(visibility.compare(weighed[0].cells, e.cells, VERDICT.cell_variance_floor)
+               < VIEW.close_call * self.options.rival_significance for e in weighed[1:]):
             self._level(fine=True)  # a close call: weigh again, finely
             weighed = [self.evidence(p.T) for p in poses]
         if self.options.method == "robust":
@@ -730,7 +833,7 @@ class Judge:
                     weighed.append(self.evidence(other.T))
             # A turn is slid home only beside a best that fits the scan (within the verdict's limit): the turns
             # of a pose that does not (a model in another object's points) fit no better, and none comes home.
-            fits = poses[0].sigma <= MAX_NOISE_RATIO * self.noise + self.options.tolerance_mm
+            fits = poses[0].sigma <= VERDICT.max_noise_ratio * self.noise + self.options.tolerance_mm
             poses, weighed, turned = self._with_turns(
                 poses, weighed, turns(poses[0]), lambda t: home(finish(t), self.noise) if fits else finish(t))
         else:
@@ -743,7 +846,8 @@ class Judge:
             ranked.append(Candidate(
                 frames.invert(p.T), score=e.score,
                 score_ratio=float(e.score / weighed[0].score) if weighed[0].score > 0 else 0.0,
-                standard_errors_below_best=visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR) if k else 0.0,
+                standard_errors_below_best=visibility.compare(weighed[0].cells, e.cells, VERDICT.cell_variance_floor)
+                if k else 0.0,
                 far_off_standard_errors=float("nan") if k else 0.0,
                 from_the_other_side=bool(k) and self._from_the_other_side(best_T, p.T), turn_of_best=t,
                 fits=self._fits(p), hidden_points=e.hidden, missing_cells=e.missing,
@@ -761,18 +865,18 @@ class Judge:
                 candidate.far_off_standard_errors = self._far_off(best_distances, candidate.to_model)
 
     def _fits(self, state) -> bool:
-        """Whether a refined pose fits the scan within FAR_OFF_FIT noises: only then are the points it
+        """Whether a refined pose fits the scan within FAR_OFF.fit noises: only then are the points it
         leaves far off evidence against it rather than a sign that it has not converged."""
-        return bool(state.sigma <= FAR_OFF_FIT * self.noise)
+        return bool(state.sigma <= FAR_OFF.fit * self.noise)
 
     def _with_turns(self, poses: list, weighed: list, turns: list, finish):
         """(poses, their evidence, whether each is a turn of the best refined like it): the best's
         near-symmetric turns (not a symmetry of the model away from it) join the poses, each replacing
         the rivals it repeats (refined less); a rival that repeats the best is dropped.  Each turn that
-        comes within CLOSE_CALL times the rival significance of the best by the view is first refined to
+        comes within VIEW.close_call times the rival significance of the best by the view is first refined to
         convergence like it (``finish``); one further behind is listed as it is, a rival of no one.  A
         turn better than the best by the view evidence, or as good by it and leaving significantly fewer
-        scan points far off the part (far_off_test) while both fit within FAR_OFF_FIT noises, becomes
+        scan points far off the part (far_off_test) while both fit within FAR_OFF.fit noises, becomes
         the best; the best it replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
 
@@ -781,7 +885,8 @@ class Judge:
                     and np.linalg.norm(frames.apply(a.T, centre[None]) - frames.apply(b.T, centre[None])) <= 2 * b.gate)
 
         def close(state) -> bool:
-            return visibility.compare(weighed[0].cells, self.evidence(state.T).cells, CELL_VARIANCE_FLOOR) < CLOSE_CALL * sig
+            return (visibility.compare(weighed[0].cells, self.evidence(state.T).cells, VERDICT.cell_variance_floor)
+                    < VIEW.close_call * sig)
 
         turns = [t for t in turns if not near(t, poses[0])]
         finished = [close(t) for t in turns]
@@ -798,12 +903,12 @@ class Judge:
         turned = [False] + finished + [False] * len(rest)
         if not any(finished):
             return poses, weighed, turned
-        if not self.fine and any(visibility.compare(weighed[0].cells, e.cells, CELL_VARIANCE_FLOOR)
-                                 < CLOSE_CALL * sig for e in weighed[1:len(turns) + 1]):
+        if not self.fine and any(visibility.compare(weighed[0].cells, e.cells, VERDICT.cell_variance_floor)
+                                 < VIEW.close_call * sig for e in weighed[1:len(turns) + 1]):
             self._level(fine=True)  # a close call: weigh again, finely
             weighed = [self.evidence(p.T) for p in poses]
         for i in sorted((i for i in range(1, len(turns) + 1) if turned[i]), key=lambda i: -weighed[i].score):
-            z = visibility.compare(weighed[0].cells, weighed[i].cells, CELL_VARIANCE_FLOOR)
+            z = visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
             if z < -sig or (z < sig and self._fits(poses[0]) and self._fits(poses[i])
                             and self._far_off(self._distances(poses[0].T), poses[i].T) <= -sig):
                 poses[0], poses[i] = poses[i], poses[0]
@@ -818,11 +923,11 @@ class Judge:
         if self.support is not None:
             beside = ~self.support.on_plane
             best_distances, rival = best_distances[beside], rival[beside]
-        return far_off_test(best_distances, rival, self.gate / EVIDENCE_SIGMAS)
+        return far_off_test(best_distances, rival, self.gate / VERDICT.evidence_sigmas)
 
     def _distances(self, T: np.ndarray) -> np.ndarray:
         """Each verdict point's distance from the model's surface under pose T (mm): exact against a
-        mesh, inf where it is surely past FAR_OFF_SIGMAS scales (its nearest sample farther than that
+        mesh, inf where it is surely past FAR_OFF.sigmas scales (its nearest sample farther than that
         plus the samples' cover); against a point model the point-to-plane residual, or the distance
         past the nearest sample's neighbourhood (a point beyond the surface's edge), inf beyond the
         far-off reach.
@@ -830,7 +935,7 @@ class Judge:
         key = (np.asarray(T, float).tobytes(), self.gate)
         if key not in self._distance_cache:
             moved = frames.apply(T, self.all_points)
-            saturated = FAR_OFF_SIGMAS * self.gate / EVIDENCE_SIGMAS  # far_off_test weighs farther points fully
+            saturated = FAR_OFF.sigmas * self.gate / VERDICT.evidence_sigmas  # far_off_test weighs farther points fully
             if self.surface.is_mesh:
                 # Exact only where it can weigh less than fully: a mesh point within that is within it
                 # plus the samples' cover of a sample, and an exact query far from a thin or round mesh
@@ -858,7 +963,7 @@ class Judge:
         if looks[0] is None or looks[1] is None:
             return False
         weights = [np.clip(1 - (r / self.gate) ** 2, 0, 1) for _, _, r in lookups]
-        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], CELL_VARIANCE_FLOOR)
+        return bool(looks[0] @ looks[1] < 0 and visibility.compare(weights[0], weights[1], VERDICT.cell_variance_floor)
                     < self.options.rival_significance)
 
     def _faces_apart(self, a: np.ndarray, b: np.ndarray) -> bool:
@@ -876,7 +981,7 @@ class Judge:
         return visibility.viewing_direction(self.surface.normals[idx[matched]] @ T[:3, :3])
 
     def _better(self, evidence: visibility.Evidence, than: visibility.Evidence) -> bool:
-        return visibility.compare(evidence.cells, than.cells, CELL_VARIANCE_FLOOR) > self.options.rival_significance
+        return visibility.compare(evidence.cells, than.cells, VERDICT.cell_variance_floor) > self.options.rival_significance
 
     def _distinct_under_symmetry(self, best, rivals) -> list:
         """Rivals that no symmetry of the model maps onto the best or onto an earlier rival."""
@@ -891,7 +996,7 @@ class Judge:
     def continued_faces(self, T: np.ndarray) -> int:
         """How many of the verdict's scan points lie off a mesh model under pose T but in the plane of a
         flat face of it facing the sensor, beside the face and joined to it by points in that plane
-        (CONTINUED_LINK_SPACINGS scan spacings apart at most): the scanned face goes on past the placed
+        (OUTLINE.link_spacings scan spacings apart at most): the scanned face goes on past the placed
         face's edge.  A pose that lays a face of the scan on a shorter face of the model leaves the rest
         of it so; the pixel test of visibility.evidence needs scan pixels next to the outline, which the
         rows of a sparse scan leave empty.  Clutter beside a part seldom lies in the plane of its faces.
@@ -914,20 +1019,20 @@ class Judge:
         # through a coarser grid than prepare fills (a CAD mesh's large faces have a large cover), which
         # would be filled for this alone.
         maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
-                     if surface.grid_level_for(threshold) < PREPARED_LEVELS else np.arange(len(moved)))
+                     if surface.grid_level_for(threshold) < REFINE.prepared_levels else np.arange(len(moved)))
         if self.support is not None:  # the plane the part stands on meets its side faces along its foot
             maybe_off = maybe_off[~self.support.on_plane[maybe_off]]
-        if len(maybe_off) < MIN_CONTINUED_POINTS:
+        if len(maybe_off) < OUTLINE.min_continued_points:
             return 0
         # Beside the model: within a few scan spacings (the rows of a sparse scan), at most
-        # CONTINUED_REACH_SAMPLES model spacings (the samples weighed per point).
-        reach = threshold + min(CONTINUED_REACH_SPACINGS * self.all_spacing, CONTINUED_REACH_SAMPLES * surface.spacing)
+        # OUTLINE.reach_samples model spacings (the samples weighed per point).
+        reach = threshold + min(OUTLINE.reach_spacings * self.all_spacing, OUTLINE.reach_samples * surface.spacing)
         # Only up to the reach (inf beyond): the tree's search for the nearest sample of a point far off
         # (clutter, stray points) visits much of it; 0.25-0.35 s of a cluttered scene's match.
         distance = surface.nearest(moved[maybe_off], reach)[0]
         far = distance > threshold
         off, distance = maybe_off[far], distance[far]  # the points off the model and their distances
-        if len(off) < MIN_CONTINUED_POINTS:
+        if len(off) < OUTLINE.min_continued_points:
             return 0
         # In a face's plane: within the gate, or a third of the tolerance where the noise is below it (an
         # exact scan's gate is 1e-6 mm, less than a found pose's own error).
@@ -935,10 +1040,10 @@ class Judge:
         beside = off[distance <= reach]
         if len(beside) == 0:
             return 0
-        beside = beside[::-(-len(beside) // CONTINUED_SEEDS)]  # enough to seed any run worth a reason
-        # (point, sample) pairs, its CONTINUED_SAMPLES nearest samples within reach, where the sample's
+        beside = beside[::-(-len(beside) // OUTLINE.seeds)]  # enough to seed any run worth a reason
+        # (point, sample) pairs, its OUTLINE.samples nearest samples within reach, where the sample's
         # tangent plane holds the point.
-        near = surface.tree.query(moved[beside], CONTINUED_SAMPLES, distance_upper_bound=reach)[1]
+        near = surface.tree.query(moved[beside], OUTLINE.samples, distance_upper_bound=reach)[1]
         found = near < len(surface.points)
         point, sample = np.broadcast_to(beside[:, None], near.shape)[found], near[found]
         normals = surface.normals[sample]
@@ -947,7 +1052,7 @@ class Judge:
         samples = np.unique(sample)
         towards = visibility.facing(frames.apply(frames.invert(T), surface.points[samples]),
                                     surface.normals[samples] @ T[:3, :3], self.viewpoint)
-        usable = surface.flat(samples, CONTINUED_FLAT_SPACINGS * surface.spacing) & (towards > CONTINUED_FACING_COS)
+        usable = surface.flat(samples, OUTLINE.flat_spacings * surface.spacing) & (towards > OUTLINE.facing_cos)
         usable = usable[np.searchsorted(samples, sample)]
         point, sample, normals = point[usable], sample[usable], normals[usable]
         if len(point) == 0:
@@ -956,9 +1061,9 @@ class Judge:
         offsets = np.einsum("ij,ij->i", normals, surface.points[sample])
         planes = np.column_stack([np.round(normals / np.radians(visibility.FLAT_DEG)), np.round(offsets / margin)])
         _, first, plane_of = np.unique(planes, axis=0, return_index=True, return_inverse=True)
-        link = CONTINUED_LINK_SPACINGS * self.all_spacing
+        link = OUTLINE.link_spacings * self.all_spacing
         continued = np.zeros(len(moved), bool)
-        for plane in np.argsort(-np.bincount(plane_of.ravel()))[:CONTINUED_PLANES]:
+        for plane in np.argsort(-np.bincount(plane_of.ravel()))[:OUTLINE.planes]:
             seeds = point[plane_of.ravel() == plane]
             j = sample[first[plane]]
             on_plane = np.union1d(off[np.abs((moved[off] - surface.points[j]) @ surface.normals[j]) <= margin], seeds)
@@ -989,7 +1094,7 @@ class Judge:
             # sensor, and the viewpoint implied by a pose that lays the part's foot on open table
             # (half a turn about the vertical) came out grazing, where its misfit shows nowhere.
             resting = (self.support.on_plane[:len(self.sample)]
-                       & (normals @ self.support.normal < -RESTING_COS))
+                       & (normals @ self.support.normal < -SUPPORT.resting_cos))
             matched &= ~resting
         points, normals = self.sample[matched], normals[matched]
         if len(points) < MIN_SCAN_POINTS:
@@ -997,18 +1102,18 @@ class Judge:
         given = self.options.viewpoint
         if given is not None:
             away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
-            if away <= MAX_FACING_AWAY:
+            if away <= VIEW.max_facing_away:
                 self._set_view(np.asarray(given, float), points.mean(axis=0), "given")
                 return
             self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
                                  f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
                                  "estimated from the scan instead")
         extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-        viewpoint = points.mean(axis=0) + VIEW_DISTANCE_EXTENTS * extent * visibility.viewing_direction(normals)
+        viewpoint = points.mean(axis=0) + VIEW.distance_extents * extent * visibility.viewing_direction(normals)
         away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
-        if away <= MAX_FACING_AWAY:
+        if away <= VIEW.max_facing_away:
             self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
-                                                           f"of its normals, {VIEW_DISTANCE_EXTENTS:g} scan extents away")
+                                                           f"of its normals, {VIEW.distance_extents:g} scan extents away")
 
     def least_contradicted(self, T: np.ndarray) -> float:
         """The smallest share of pose T's view contradicted, looking from the viewpoint and from
@@ -1021,7 +1126,7 @@ class Judge:
             return share
         viewpoint, centre = self.viewpoint, self.target
         distance = np.linalg.norm(viewpoint - centre)
-        for direction in visibility.cone((viewpoint - centre) / distance, SETTLE_STEP_DEG, rings=2)[1:]:
+        for direction in visibility.cone((viewpoint - centre) / distance, VIEW.settle_step_deg, rings=2)[1:]:
             self._set_view(centre + distance * direction, centre, self.source)
             share = min(share, _contradicted(self.evidence(T)))
         self._set_view(viewpoint, centre, self.source)
@@ -1045,7 +1150,7 @@ class Judge:
         standing_on = None if self.support is None else self.support.on_plane[:len(self.sample)]
         return visibility.evidence(self.view, weights, frames.apply(frames.invert(T), self.surface.points[samples]),
                                    self.surface.normals[samples] @ T[:3, :3], self.gate, self.gate + 2 * self.pixel,
-                                   OFF_BAND_GATES * self.gate, on_model, standing_on)
+                                   OUTLINE.off_band_gates * self.gate, on_model, standing_on)
 
     def wall_thickness(self, T: np.ndarray, evidence: visibility.Evidence) -> float:
         """Median thickness of the part where pose T explains the view (mm; inf without a view)."""
@@ -1075,9 +1180,9 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
     notch or a rim leaves only a few tens of points off, in too few cells to tell, but it leaves them
     ten and more noises off, where noise puts no point.  Each point weighs a robust log-likelihood
     ratio, a truncated quadratic in its distance beyond the noise band: w(u) = clip((u^2 - 3^2) /
-    (FAR_OFF_SIGMAS^2 - 3^2), 0, 1) for u = distance / sigma, so a point within EVIDENCE_SIGMAS of
+    (FAR_OFF.sigmas^2 - 3^2), 0, 1) for u = distance / sigma, so a point within VERDICT.evidence_sigmas of
     the surface counts nothing (within the noise, a pose's small misfit must not decide), one
-    FAR_OFF_SIGMAS or more off counts fully, and no outlier counts more than that.  The per-point
+    FAR_OFF.sigmas or more off counts fully, and no outlier counts more than that.  The per-point
     differences d = w(rival) - w(best) are paired (one scan, both poses): when the two poses explain
     the scan alike (a symmetry, a view that cannot tell), each difference is as likely either way,
     so their sum is tested against its sign-flip distribution (sign_flip_z): exactly when a few tens
@@ -1086,7 +1191,7 @@ def far_off_test(best: np.ndarray, rival: np.ndarray, sigma: float) -> float:
     far off."""
     def weight(distance):
         u2 = (distance / max(sigma, 1e-9)) ** 2
-        return np.clip((u2 - EVIDENCE_SIGMAS**2) / (FAR_OFF_SIGMAS**2 - EVIDENCE_SIGMAS**2), 0.0, 1.0)
+        return np.clip((u2 - VERDICT.evidence_sigmas**2) / (FAR_OFF.sigmas**2 - VERDICT.evidence_sigmas**2), 0.0, 1.0)
 
     return sign_flip_z(weight(rival) - weight(best))
 
@@ -1098,15 +1203,15 @@ def sign_flip_z(d: np.ndarray) -> float:
     chance that it comes out exactly as far (a one-sided mid-p value: the plain exact p-value of a
     discrete sum is conservative, its mid-p about as often below a level as a continuous one: nine
     differences all one way, 2^-10, 3.1 standard errors; eight, 2.9).  Exact, on a grid of
-    1/SIGN_FLIP_STEPS, for up to EXACT_SIGN_FLIPS nonzero differences (the normal approximation of a
+    1/FAR_OFF.sign_flip_steps, for up to FAR_OFF.exact_sign_flips nonzero differences (the normal approximation of a
     sum of a few unequal terms is poor: ten points all one way scored 2.8 to 3.2 by their sizes);
     beyond, the sum over its null standard deviation sqrt(sum d^2).  0 when the differences cancel."""
-    steps = np.rint(np.asarray(d, float) * SIGN_FLIP_STEPS).astype(np.int64)
+    steps = np.rint(np.asarray(d, float) * FAR_OFF.sign_flip_steps).astype(np.int64)
     steps = steps[steps != 0]
     total = int(steps.sum())
     if total == 0:
         return 0.0
-    if len(steps) > EXACT_SIGN_FLIPS:
+    if len(steps) > FAR_OFF.exact_sign_flips:
         return total / float(np.sqrt(np.sum(steps.astype(float) ** 2)))
     chance = np.ones(1)  # chance[s] of the sum s - offset under random signs, built one difference at a time
     for k in np.abs(steps):
@@ -1121,25 +1226,25 @@ def sign_flip_z(d: np.ndarray) -> float:
 
 
 def _widened(state, medium: np.ndarray, surface: SurfaceModel):
-    """The pose refined again from WIDER_GATE times its gate on a few points: one stage at the
+    """The pose refined again from REFINE.wider_gate times its gate on a few points: one stage at the
     wide gate, and only when that moved it, down to the fine gate again."""
-    gate = WIDER_GATE * state.gate
-    wide = refine(medium[:WIDER_POINTS], surface, state.T, gate, gate / 3, max_iterations=10, tolerance=1e-4)
+    gate = REFINE.wider_gate * state.gate
+    wide = refine(medium[:REFINE.wider_points], surface, state.T, gate, gate / 3, max_iterations=10, tolerance=1e-4)
     if not _moved(wide.T, state.T, medium.mean(axis=0), state.gate):
         return wide
     return coarse_to_fine([medium], surface, wide.T, gate, surface.spacing)
 
 
 def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, polish, hopeless: float):
-    """The pose, or when it fits worse than FAR_OFF_FIT noises, the pose refined again from
-    HOME_SHIFTS_MM along each motion of its fit (the eigenvectors of its point-to-plane constraints,
-    stability.gelfand) either way, polished, when that fits clearly better (HOME_GAIN, both residual
+    """The pose, or when it fits worse than FAR_OFF.fit noises, the pose refined again from
+    REFINE.home_shifts_mm along each motion of its fit (the eigenvectors of its point-to-plane constraints,
+    stability.gelfand) either way, polished, when that fits clearly better (REFINE.home_gain, both residual
     scales on the medium points the tries are refined on) and keeps at least as many scan points on
     the model.  A refinement that stopped in a local minimum (a pose slid along a curved part: the
     scan points past the part's end pull it nowhere, point-to-plane) is pulled home; a right pose
-    (within FAR_OFF_FIT noises) is never touched, nor is one whose residual scale is above ``hopeless``
-    (HOPELESS_FIT: it is no slide from fitting; a wrong model's poses are all such)."""
-    if not FAR_OFF_FIT * noise < state.sigma <= hopeless:
+    (within FAR_OFF.fit noises) is never touched, nor is one whose residual scale is above ``hopeless``
+    (REFINE.hopeless_fit: it is no slide from fitting; a wrong model's poses are all such)."""
+    if not FAR_OFF.fit * noise < state.sigma <= hopeless:
         return state
     moved = frames.apply(state.T, medium)
     found, residuals, normals = surface.tangent_planes(moved, state.gate)
@@ -1152,11 +1257,11 @@ def _slid_home(state, medium: np.ndarray, surface: SurfaceModel, noise: float, p
     home, home_sigma = state, here
     for v in vecs.T:
         twist = unit_twist(v, centre, radius, moved[found])
-        for amount in (*HOME_SHIFTS_MM, *(-a for a in HOME_SHIFTS_MM)):
+        for amount in (*REFINE.home_shifts_mm, *(-a for a in REFINE.home_shifts_mm)):
             tried = refine(medium, surface, slide(twist, centre, amount) @ state.T, state.gate, state.scale)
             if tried.sigma < home_sigma:
                 home, home_sigma = tried, tried.sigma
-    if home is state or not home_sigma <= HOME_GAIN * here:
+    if home is state or not home_sigma <= REFINE.home_gain * here:
         return state
     before, after = inlier_scores(medium, surface, [state.T, home.T], state.gate)
     return polish(home) if after >= before else state
@@ -1168,10 +1273,10 @@ def _contradicted(evidence: visibility.Evidence) -> float:
 
 
 def _misfit(evidence: visibility.Evidence) -> bool:
-    """Whether a pose's view shows signs of sitting a little off: MISFIT_SHARE of its cells
+    """Whether a pose's view shows signs of sitting a little off: REFINE.misfit_share of its cells
     contradicted (hidden, missing, continued past its outline) or behind its surface."""
     cells = max(int(np.count_nonzero(evidence.cells)), 1)
-    return (np.count_nonzero(evidence.cells <= -0.5) + evidence.off) >= MISFIT_SHARE * cells
+    return (np.count_nonzero(evidence.cells <= -0.5) + evidence.off) >= REFINE.misfit_share * cells
 
 
 def _moved(T: np.ndarray, reference: np.ndarray, centre: np.ndarray, gate: float) -> bool:
@@ -1196,13 +1301,13 @@ def _verdict(scan: Cloud, sample: np.ndarray, surface: SurfaceModel, best, ranke
     failures = _failures(fit, judge, view, options, T)
     if not failures:
         judge.weigh_far_off(ranked)
-    # A fit worse than FAR_OFF_FIT noises (what is taken as explaining the scan to its noise) leaves
+    # A fit worse than FAR_OFF.fit noises (what is taken as explaining the scan to its noise) leaves
     # structure in the residuals that the cells' spread does not see (the part differs from its model,
     # the sensor has its own): the standard errors are stretched by the excess, as a least-squares
     # fit's are by the square root of its reduced chi-square.
     fit_to_noise = fit.sigma / max(judge.noise, 1e-9)
-    view["required_standard_errors"] = options.rival_significance * max(1.0, fit_to_noise / FAR_OFF_FIT)
-    _mark_rivals(ranked, fit_to_noise <= FAR_OFF_FIT, view["required_standard_errors"], options)
+    view["required_standard_errors"] = options.rival_significance * max(1.0, fit_to_noise / FAR_OFF.fit)
+    _mark_rivals(ranked, fit_to_noise <= FAR_OFF.fit, view["required_standard_errors"], options)
     doubts = [] if failures else _doubts(ranked, surface, judge, view, stab, options, T)
     status = FAILED if failures else AMBIGUOUS if doubts else OK
     n_in, distance = len(fit.distance), fit.distance
@@ -1272,27 +1377,27 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
     if fit.coverage < options.min_coverage:
         reasons.append(Reason(LOW_COVERAGE, f"the matched points cover only {fit.coverage:.1%} of the model surface "
                                             f"(at least {options.min_coverage:.0%} needed)"))
-    if fit.sigma > MAX_NOISE_RATIO * noise + tolerance:
+    if fit.sigma > VERDICT.max_noise_ratio * noise + tolerance:
         reasons.append(Reason(MISFIT, (
             f"the model does not fit the scan within its noise: residual scale {fit.sigma:.2f} mm where "
-            f"the scan's own noise is {noise:.2f} mm (at most {MAX_NOISE_RATIO:g} x noise + "
+            f"the scan's own noise is {noise:.2f} mm (at most {VERDICT.max_noise_ratio:g} x noise + "
             f"{tolerance} mm tolerance): the scan may not contain this model")))
     if options.tolerance_gates and fit.rms > tolerance:
         reasons.append(Reason(RMS, (
             f"the fit's RMS {fit.rms:.3f} mm is more than the {tolerance:g} mm tolerance: the part differs "
             "from its model by more than the tolerance allows, or the pose is off")))
     within = fit.within_pct(tolerance)
-    if options.tolerance_gates and within < MIN_WITHIN_TOLERANCE_PCT:
+    if options.tolerance_gates and within < VERDICT.min_within_tolerance_pct:
         reasons.append(Reason(WITHIN_TOLERANCE, (
             f"only {within:.0f} % of the matched points lie within the {tolerance:g} mm "
-            f"tolerance (at least {MIN_WITHIN_TOLERANCE_PCT:.0f} %): the part differs from its model by more "
+            f"tolerance (at least {VERDICT.min_within_tolerance_pct:.0f} %): the part differs from its model by more "
             "than the tolerance allows, or the pose is off")))
-    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+    if view.get("contradicted_pct", 0.0) > 100 * VERDICT.max_contradicted:
         view["contradicted_pct"] = 100 * judge.least_contradicted(T)
-    if view.get("contradicted_pct", 0.0) > 100 * MAX_CONTRADICTED:
+    if view.get("contradicted_pct", 0.0) > 100 * VERDICT.max_contradicted:
         reasons.append(Reason(VIEW_CONTRADICTED, (
             f"the placed model contradicts {view['contradicted_pct']:.0f} % of the view, from the viewpoint "
-            f"and from up to {2 * SETTLE_STEP_DEG:g} degrees around it (at most {100 * MAX_CONTRADICTED:.0f} "
+            f"and from up to {2 * VIEW.settle_step_deg:g} degrees around it (at most {100 * VERDICT.max_contradicted:.0f} "
             f"%): it would hide {view['hidden_points']} scan points and {view['missing_cells']} view cells "
             "of its surface facing the sensor show nothing; the pose leaves much of the scan unexplained")))
     return reasons
@@ -1305,7 +1410,7 @@ def _mark_rivals(ranked: list, best_fits: bool, significance: float, options: Ma
     refined exactly like it (its flip, tried always; one significantly better by the view's cells, or as
     good by them and leaving
     significantly fewer points far off, took the best's place, see Judge._with_turns), and only when both
-    it and the best fit the scan within FAR_OFF_FIT noises (``best_fits``, on the verdict's points and on
+    it and the best fit the scan within FAR_OFF.fit noises (``best_fits``, on the verdict's points and on
     the fine ones): a pose refined less (or one that does not fit) can leave points far off by being
     unconverged, and on scans simulated by ray casting (open3d 0.19) ruling out such a right pose made a
     flip "ok"."""
@@ -1342,39 +1447,39 @@ def _doubts(ranked: list, surface: SurfaceModel, judge: Judge, view: dict, stab:
             f"{len(rivals)} clearly different pose(s) explain the view about as well: the closest, "
             f"{r.rotation_from_best_deg:.1f} deg away, scores {r.score_ratio:.0%} of the best, only "
             f"{r.standard_errors_below_best:.1f} standard errors below it ({view['cells']} view cells, "
-            f"residual scale {judge.gate / EVIDENCE_SIGMAS:.2f} mm){_far_off_words(r)}, where "
+            f"residual scale {judge.gate / VERDICT.evidence_sigmas:.2f} mm){_far_off_words(r)}, where "
             f"{view['required_standard_errors']:.1f} would tell them apart{_stretched_words(view, options)}: "
             "the part may be nearly symmetric; see candidates")))
-    if view.get("off_pct", 0.0) > 100 * MAX_OFF:
+    if view.get("off_pct", 0.0) > 100 * OUTLINE.max_off:
         reasons.append(Reason(BEHIND_SURFACE, (
             f"{view['off_pct']:.0f} % of the view inside the placed model's outline lies behind its surface "
-            f"(at most {100 * MAX_OFF:.0f} %): clay carved away, or a wrong pose that leaves that share of "
+            f"(at most {100 * OUTLINE.max_off:.0f} %): clay carved away, or a wrong pose that leaves that share of "
             "the scan unexplained")))
     # Walls under two sample spacings are not resolved by the sampled model: only look for thinner ones.
-    resolved = THIN_WALL_NOISES * judge.noise > 2 * surface.spacing
+    resolved = VERDICT.thin_wall_noises * judge.noise > 2 * surface.spacing
     thickness = judge.wall_thickness(T, ranked[0].evidence) if resolved else float("inf")
-    if thickness < THIN_WALL_NOISES * judge.noise:
+    if thickness < VERDICT.thin_wall_noises * judge.noise:
         reasons.append(Reason(THIN_WALL, (
             f"the part is only {thickness:.1f} mm thick where the scan sees it, less than "
-            f"{THIN_WALL_NOISES:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
+            f"{VERDICT.thin_wall_noises:g} times the noise ({judge.noise:.2f} mm): on this scan its two faces "
             "cannot be told apart")))
-    if view.get("continued_pct", 0.0) > 100 * MAX_CONTINUED:
+    if view.get("continued_pct", 0.0) > 100 * OUTLINE.max_continued:
         reasons.append(Reason(OUTLINE_CONTINUED, (
             f"the scanned surface goes on past the placed model's outline along {view['continued_pct']:.0f} % "
-            f"of it (at most {100 * MAX_CONTINUED:.0f} %): the pose may be off by that part of the scan, "
+            f"of it (at most {100 * OUTLINE.max_continued:.0f} %): the pose may be off by that part of the scan, "
             "or something lies flush with the part there")))
     continued = judge.continued_faces(T)
-    if continued >= MIN_CONTINUED_POINTS and continued > MAX_CONTINUED_POINTS * len(judge.all_points):
+    if continued >= OUTLINE.min_continued_points and continued > OUTLINE.max_continued_points * len(judge.all_points):
         reasons.append(Reason(FACE_CONTINUED, (
             f"{continued} scan points ({continued / len(judge.all_points):.0%}) lie off the placed model in "
             "the plane of a face of it that they run on from: the scanned face goes on past the model's "
             "edge, so the pose may lay it on another face (or the scan is scaled, or something lies "
             "flush with the part)")))
     depth = _depth_through_support(judge.support, surface, T)
-    if depth > SUPPORT_TOLERANCES * options.tolerance_mm:
+    if depth > SUPPORT.tolerances * options.tolerance_mm:
         reasons.append(Reason(THROUGH_SUPPORT, (
             f"the placed model reaches {depth:.1f} mm through the plane the rest of the scan stands on "
-            f"(at most {SUPPORT_TOLERANCES:g} times the tolerance): a part cannot be inside the table "
+            f"(at most {SUPPORT.tolerances:g} times the tolerance): a part cannot be inside the table "
             "it stands on, so the pose may be slid or turned (or the part stands in a pocket below "
             "that plane)")))
     if not stab["constrained"]:
@@ -1439,7 +1544,7 @@ def _stretched_words(view: dict, options: MatchOptions) -> str:
     """Why more standard errors than ``rival_significance`` are asked, for a rival's reason."""
     if view["required_standard_errors"] <= options.rival_significance:
         return ""
-    ratio = FAR_OFF_FIT * view["required_standard_errors"] / options.rival_significance
+    ratio = FAR_OFF.fit * view["required_standard_errors"] / options.rival_significance
     return (f" (the model explains the scan only to {ratio:.1f} times its noise: the part differs from its "
             "model, or the sensor has structure of its own)")
 

@@ -45,8 +45,8 @@ DTYPES = ("<f8", "<f4", "<i8", "<i4", "|b1")
 # A model loaded from the cache is written again when its run added features, or grid cells
 # numbering at least this many and this fraction of those stored.
 GROWTH_CELLS, GROWTH_FRACTION = 5000, 0.2
-# Modules whose source shapes a prepared model (for a model file, also how it is read): their
-# bytes go into every key, so changed code never meets a model prepared by the old one.
+# Modules (or packages) whose source shapes a prepared model (for a model file, also how it is read):
+# their bytes go into every key, so changed code never meets a model prepared by the old one.
 SHAPING_MODULES = ("surface", "symmetry", "robust", "pointops", "features", "global_search", "geometry")
 READING_MODULES = ("readers", "units", "files")
 
@@ -206,6 +206,16 @@ def _key(*parts: bytes, modules) -> str:
 _fingerprints: dict = {}
 
 
+def _source(folder: Path, name: str) -> bytes:
+    """The source of module ``name``, or of package ``name`` (each of its modules, in name order)."""
+    if not (folder / name).is_dir():
+        return (folder / f"{name}.py").read_bytes()
+    sources = sorted((folder / name).glob("*.py"))
+    if not sources:
+        raise FileNotFoundError(folder / name / "__init__.py")
+    return b"".join(path.read_bytes() for path in sources)
+
+
 def _code_fingerprint(modules) -> bytes:
     """SHA-256 of the source of the core modules named (the code that prepares a model)."""
     modules = tuple(modules)
@@ -214,7 +224,7 @@ def _code_fingerprint(modules) -> bytes:
         folder = Path(__file__).parent
         for name in modules:
             try:
-                h.update((folder / f"{name}.py").read_bytes())
+                h.update(_source(folder, name))
             except OSError:  # no source beside us (a frozen install): the version must do
                 from workcal_wb import __version__
 

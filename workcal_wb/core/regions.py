@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import copy
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -19,57 +19,88 @@ from scipy.spatial import cKDTree
 from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import SHAPE_WORDS, Cloud, shape_kind
-from .match import MIN_WITHIN_TOLERANCE_PCT as MIN_MATCH_WITHIN_TOLERANCE_PCT, MatchOptions, match
+from .match import VERDICT, MatchOptions, match
 from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
                      Reason)
 from .surface import GATE_CELLS, SurfaceModel
 
-# The platform must hold at least this fraction of the scan to count as one (a dark table returns few
-# points); and, when its up side comes from the data (_up_side), at least SUPPORTED_SHARE of the points
-# off it must lie over it, UP_SIDE_SHARE of those over its hull less the margin on one side.
-MIN_PLATFORM_FRACTION = 0.05
-SUPPORTED_SHARE, UP_SIDE_SHARE, ALL_ON_ONE_SIDE = 0.5, 0.8, 0.9
-# A platform's hull has at least this many times the area of the objects' footprint on it: a platform is larger
-# than what stands on it, a face of an object taken for one (in a scene without a platform) is not.
-FOOTPRINT_RATIO = 1.25
-# The largest planes tried in turn (most points first) until one is the platform.
-PLATFORM_CANDIDATES = 5
-HULL_MARGIN_MM, HULL_MARGIN_SPACINGS = 5.0, 10.0
-# A given up direction picks the largest plane within this angle of square to it.
-MAX_UP_DEG = 30.0
-PLANE_RANSAC_TRIALS = 2000
-PLANE_SAMPLE_POINTS = 5000
-PLANE_CHUNK = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
-# Points this close to the platform plane (mm, plus a few scan spacings) are platform.
-PLATFORM_BAND_MM = 1.0
-# Objects are split where the gap between points exceeds this many scan spacings.
-LINK_SPACINGS = 4.0
-# A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
-SIZE_RATIO_RANGE = (0.15, 1.5)
-MIN_CLUSTER_POINTS = 100
-# A cluster belongs to an object when this fraction of it lies near the placed model (lumps of clay
-# added later are connected to the workpiece and come along).  Below TOUCHING_SHARE of the object's
-# clusters near its model, it touches something else and only its near points are kept.
-CLUSTER_SHARE = 0.5
-TOUCHING_SHARE = 0.9
-# A match only locates an object when most matched points lie within the tolerance and most of the candidate
-# is explained (a wrong model placed "as well as it goes" scores far lower): the reference is rigid and
-# unchanged, the workpiece may have had clay added or carved.
-MIN_WITHIN_TOLERANCE_PCT = {"reference": 80.0, "workpiece": MIN_MATCH_WITHIN_TOLERANCE_PCT}
-MIN_FITNESS = {"reference": 0.8, "workpiece": 0.5}
-# Global searches tried before a pose that explains less than GOOD_FITNESS of its region is accepted,
-# unless a search comes back to a pose it found before (within these limits).
-SEARCH_ATTEMPTS = 3
-SAME_POSE_DEG, SAME_POSE_DIAGONALS = 1.0, 0.01
-GOOD_FITNESS = {"reference": 0.95, "workpiece": 0.9}
-# Where the reference touches something, its region keeps only points this close to its surface: this
-# many times the scan's noise, and at least MIN_ON_SURFACE_MM.
-ON_SURFACE_NOISES, MIN_ON_SURFACE_MM = 5.0, 0.5
-# A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
-MIN_FITNESS_OF_CLUSTER = 0.05
-# Where objects touch, the points of their clusters on neither placed model (clay joining them, points at the
-# contact) stay under this share of the reference region's; a wrong pose leaves far more.
-UNEXPLAINED_SHARE = 0.25
+@dataclass(frozen=True)
+class PlatformSettings:
+    """The platform: the plane the objects stand on, found among the scan's largest planes."""
+
+    # The platform must hold at least this fraction of the scan to count as one (a dark table returns few
+    # points); and, when its up side comes from the data (_up_side), at least supported_share of the points
+    # off it must lie over it, up_side_share of those over its hull less the margin on one side.
+    min_fraction: float = 0.05
+    supported_share: float = 0.5
+    up_side_share: float = 0.8
+    all_on_one_side: float = 0.9
+    # A platform's hull has at least this many times the area of the objects' footprint on it: a platform is larger
+    # than what stands on it, a face of an object taken for one (in a scene without a platform) is not.
+    footprint_ratio: float = 1.25
+    # The largest planes tried in turn (most points first) until one is the platform.
+    candidates: int = 5
+    hull_margin_mm: float = 5.0
+    hull_margin_spacings: float = 10.0
+    # A given up direction picks the largest plane within this angle of square to it.
+    max_up_deg: float = 30.0
+    ransac_trials: int = 2000
+    sample_points: int = 5000
+    chunk: int = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
+    # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
+    band_mm: float = 1.0
+
+
+PLATFORM = PlatformSettings()
+
+
+@dataclass(frozen=True)
+class ClusterSettings:
+    """The clusters the points off the platform fall into, and which of them belong to an object."""
+
+    # Objects are split where the gap between points exceeds this many scan spacings.
+    link_spacings: float = 4.0
+    # A cluster is a candidate for a model when its size is within these ratios of the model diagonal.
+    size_ratio_range: tuple = (0.15, 1.5)
+    min_points: int = 100
+    # A cluster belongs to an object when this fraction of it lies near the placed model (lumps of clay
+    # added later are connected to the workpiece and come along).  Below touching_share of the object's
+    # clusters near its model, it touches something else and only its near points are kept.
+    share: float = 0.5
+    touching_share: float = 0.9
+
+
+CLUSTERS = ClusterSettings()
+
+
+@dataclass(frozen=True)
+class LocateSettings:
+    """What a match must explain to locate an object, and how often its search is tried."""
+
+    # A match only locates an object when most matched points lie within the tolerance and most of the candidate
+    # is explained (a wrong model placed "as well as it goes" scores far lower): the reference is rigid and
+    # unchanged, the workpiece may have had clay added or carved.
+    min_within_tolerance_pct: dict = field(default_factory=lambda: {
+        "reference": 80.0, "workpiece": VERDICT.min_within_tolerance_pct})
+    min_fitness: dict = field(default_factory=lambda: {"reference": 0.8, "workpiece": 0.5})
+    # Global searches tried before a pose that explains less than good_fitness of its region is accepted,
+    # unless a search comes back to a pose it found before (within these limits).
+    search_attempts: int = 3
+    same_pose_deg: float = 1.0
+    same_pose_diagonals: float = 0.01
+    good_fitness: dict = field(default_factory=lambda: {"reference": 0.95, "workpiece": 0.9})
+    # Where the reference touches something, its region keeps only points this close to its surface: this
+    # many times the scan's noise, and at least min_on_surface_mm.
+    on_surface_noises: float = 5.0
+    min_on_surface_mm: float = 0.5
+    # A cluster that holds the model and more (objects touching) may put this small a share of its points on it.
+    min_fitness_of_cluster: float = 0.05
+    # Where objects touch, the points of their clusters on neither placed model (clay joining them, points at the
+    # contact) stay under this share of the reference region's; a wrong pose leaves far more.
+    unexplained_share: float = 0.25
+
+
+LOCATE = LocateSettings()
 
 
 @dataclass
@@ -116,7 +147,7 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
             up, viewpoint, blas_threads: int | None) -> Located:
     points = scan.points
     valid = np.flatnonzero(np.isfinite(points).all(axis=1))
-    if len(valid) < MIN_CLUSTER_POINTS:
+    if len(valid) < CLUSTERS.min_points:
         raise InputError(f"{scan.name}: only {len(valid)} valid points; a scene scan needs far more")
     on_scan = points[valid]  # the valid points, copied once
     kind = shape_kind(on_scan)
@@ -128,10 +159,10 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     warnings = []
     platform = find_platform(on_scan, spacing, rng, up, viewpoint)
     if platform is None:
-        warnings.append(f"{scan.name}: no platform plane found (no plane holds {MIN_PLATFORM_FRACTION:.0%} of the "
+        warnings.append(f"{scan.name}: no platform plane found (no plane holds {PLATFORM.min_fraction:.0%} of the "
                         "points with the objects standing on one side of it); every point is treated as an object")
         platform_idx, objects = np.empty(0, dtype=np.int64), valid
-        labels = _clusters(points[objects], LINK_SPACINGS * spacing)
+        labels = _clusters(points[objects], CLUSTERS.link_spacings * spacing)
     else:
         platform_idx, objects, labels = valid[platform.below], valid[~platform.below], platform.labels
     report = progress or (lambda fraction, message: None)
@@ -142,8 +173,8 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
     context = dict(scan=scan, points=points, spacing=spacing, surfaces=surfaces, near_mm=near_mm, platform=platform,
                    searched={}, labels=labels,
                    tolerance_mm=tolerance_mm, options=dict(tolerance_mm=tolerance_mm, seed=seed,
-                                                           min_fitness=MIN_FITNESS_OF_CLUSTER, tolerance_gates=False,
-                                                           blas_threads=blas_threads,
+                                                           min_fitness=LOCATE.min_fitness_of_cluster,
+                                                           tolerance_gates=False, blas_threads=blas_threads,
                                                            viewpoint=None if viewpoint is None else tuple(viewpoint),
                                                            support=standing_on(platform)))
     with ThreadPoolExecutor(max_workers=1) as ahead:  # leaving it waits for a search ahead that was not needed
@@ -158,19 +189,19 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
         reference_idx = reference_idx[nearer_own_model(points[reference_idx], (reference, reference_match.matrix),
                                                        (workpiece, workpiece_match.matrix), near_mm["workpiece"])]
         # The reference is rigid and unchanged: clay pressed against it lies off its surface.
-        within = max(MIN_ON_SURFACE_MM, ON_SURFACE_NOISES * reference_match.noise_mm)
+        within = max(LOCATE.min_on_surface_mm, LOCATE.on_surface_noises * reference_match.noise_mm)
         reference_idx = reference_idx[_on_surface(points[reference_idx], reference, reference_match.matrix, within)]
         workpiece_idx = workpiece_idx[nearer_own_model(points[workpiece_idx], (workpiece, workpiece_match.matrix),
                                                        (reference, reference_match.matrix), near_mm["reference"])]
         warnings.append(f"{scan.name}: the reference touches another object (the workpiece, clay or a clamp): the "
                         f"scan was split between the placed models; each region is only the points nearer its model")
         left = _unexplained(objects, labels, workpiece_idx, reference_idx)
-        if left > UNEXPLAINED_SHARE * len(reference_idx) and reference_match.status == OK:
+        if left > LOCATE.unexplained_share * len(reference_idx) and reference_match.status == OK:
             reference_match.status = AMBIGUOUS
             reference_match.reasons.append(Reason(SPLIT_UNEXPLAINED, (
                 f"{left} points of the objects that touch lie on neither placed model (more than "
-                f"{UNEXPLAINED_SHARE:.0%} of the reference's {len(reference_idx)}): the models may split them wrongly "
-                "(a pose that fits part of the reference); scan the objects apart, or give the regions")))
+                f"{LOCATE.unexplained_share:.0%} of the reference's {len(reference_idx)}): the models may split them "
+                "wrongly (a pose that fits part of the reference); scan the objects apart, or give the regions")))
     return Located(workpiece_idx, reference_idx, platform_idx, workpiece_match, reference_match, warnings, platform,
                    {role: found[role][3] for role in ("workpiece", "reference")}, spacing)
 
@@ -219,7 +250,7 @@ def _search(scan: Cloud, points, members, larger: bool, surface: SurfaceModel, o
     explains most of it, so searching again with other seeds cannot tell a better pose (see
     match_trusted); the split in _first_match judges the one found."""
     return match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
-                         stands, attempts=1 if larger else SEARCH_ATTEMPTS)
+                         stands, attempts=1 if larger else LOCATE.search_attempts)
 
 
 def _unexplained(objects, labels, *regions) -> int:
@@ -257,7 +288,7 @@ def _in_turn(objects, order, report, scan, points, spacing, surfaces, near_mm, p
         left = left[~region]
         # Whole clusters taken leave the others as they were; a split one may fall apart.
         labels = _renumbered(labels[~region]) if not on.touching and len(left) \
-            else _clusters(points[left], LINK_SPACINGS * spacing)
+            else _clusters(points[left], CLUSTERS.link_spacings * spacing)
     return found
 
 
@@ -301,7 +332,7 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None,
-                  attempts: int = SEARCH_ATTEMPTS) -> MatchResult:
+                  attempts: int = LOCATE.search_attempts) -> MatchResult:
     """Match, and when the pose does not explain the region, search again with other seeds and keep
     the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
     nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers.
@@ -320,23 +351,23 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
                                          for U in [best.matrix] + [c.matrix for c in best.candidates[1:]])
         if best is None or rank(result) > rank(best):
             best = result
-        if best.ok and best.fitness >= GOOD_FITNESS[role] and rank(best)[1]:
+        if best.ok and best.fitness >= LOCATE.good_fitness[role] and rank(best)[1]:
             break
         if again:  # another search came back to the same pose: the search is not what falls short
             break
         too_small = result.coverage < options.get("min_coverage", MatchOptions.min_coverage)
-        if too_small and result.fitness >= GOOD_FITNESS[role]:
+        if too_small and result.fitness >= LOCATE.good_fitness[role]:
             break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
     return best
 
 
 def _same_pose(a: np.ndarray | None, b: np.ndarray | None, surface: SurfaceModel) -> bool:
-    """Whether two poses (U, None where a match found none) place the model alike (within SAME_POSE_DEG
-    and SAME_POSE_DIAGONALS)."""
+    """Whether two poses (U, None where a match found none) place the model alike (within LOCATE.same_pose_deg
+    and LOCATE.same_pose_diagonals)."""
     if a is None or b is None:
         return False
-    return (frames.rotation_between_deg(a, b) < SAME_POSE_DEG
-            and np.linalg.norm(a[:3, 3] - b[:3, 3]) < SAME_POSE_DIAGONALS * surface.diagonal)
+    return (frames.rotation_between_deg(a, b) < LOCATE.same_pose_deg
+            and np.linalg.norm(a[:3, 3] - b[:3, 3]) < LOCATE.same_pose_diagonals * surface.diagonal)
 
 
 @dataclass
@@ -361,33 +392,33 @@ def find_platform(points: np.ndarray, spacing: float, rng: np.random.Generator, 
                   viewpoint=None) -> Platform | None:
     """The largest plane the objects stand on, if there is one (see ``_up_side``), in any frame.
 
-    ``up`` (a direction the user gives) picks the largest plane square to it within MAX_UP_DEG;
+    ``up`` (a direction the user gives) picks the largest plane square to it within PLATFORM.max_up_deg;
     otherwise the plane holding the most points.  Which side is up: ``up``, else the side the
     ``viewpoint`` (the scanner's position, given or read from the file) is on, else the side the
     objects stand on (_up_side)."""
-    sample = points[rng.choice(len(points), min(len(points), PLANE_SAMPLE_POINTS), replace=False)]
-    band = PLATFORM_BAND_MM + 2 * spacing
-    triples = sample[rng.integers(0, len(sample), (PLANE_RANSAC_TRIALS, 3))]
+    sample = points[rng.choice(len(points), min(len(points), PLATFORM.sample_points), replace=False)]
+    band = PLATFORM.band_mm + 2 * spacing
+    triples = sample[rng.integers(0, len(sample), (PLATFORM.ransac_trials, 3))]
     normals = np.cross(triples[:, 1] - triples[:, 0], triples[:, 2] - triples[:, 0])
     length = np.linalg.norm(normals, axis=1)
     keep = length > 1e-9
     if up is not None:
         up = np.asarray(up, dtype=float) / np.linalg.norm(up)
-        keep &= np.abs(normals @ up) > np.cos(np.radians(MAX_UP_DEG)) * np.maximum(length, 1e-12)
+        keep &= np.abs(normals @ up) > np.cos(np.radians(PLATFORM.max_up_deg)) * np.maximum(length, 1e-12)
     if not keep.any():  # every sampled triple is collinear (or none is square to ``up``): no plane at all
         return None
     normals, triples = normals[keep] / length[keep, None], triples[keep]
     offsets = np.einsum("ij,ij->i", normals, triples[:, 0])
     near = np.empty((len(sample), len(normals)), dtype=bool)  # (sample, plane)
-    for start in range(0, len(sample), PLANE_CHUNK):  # a chunk at a time: it stays in the cache
-        distance = sample[start:start + PLANE_CHUNK] @ normals.T
+    for start in range(0, len(sample), PLATFORM.chunk):  # a chunk at a time: it stays in the cache
+        distance = sample[start:start + PLATFORM.chunk] @ normals.T
         distance -= offsets
-        near[start:start + PLANE_CHUNK] = np.abs(distance, out=distance) < band
+        near[start:start + PLATFORM.chunk] = np.abs(distance, out=distance) < band
     remaining = np.ones(len(sample), dtype=bool)
-    for _ in range(PLATFORM_CANDIDATES):  # the largest plane, then the largest of the points left, ...
+    for _ in range(PLATFORM.candidates):  # the largest plane, then the largest of the points left, ...
         counts = near[remaining].view(np.uint8).sum(axis=0, dtype=np.int64)  # bytes add faster than booleans
         best = int(np.argmax(counts))
-        if counts[best] < MIN_PLATFORM_FRACTION * len(sample):
+        if counts[best] < PLATFORM.min_fraction * len(sample):
             return None
         platform = _platform_on(points, sample[near[:, best]], band, spacing, up, viewpoint)
         if platform is not None:
@@ -420,7 +451,7 @@ def _platform_on(points, inliers, band: float, spacing: float, up, viewpoint) ->
     normal = side * normal
     height = (points - centre) @ normal
     below = height < band
-    labels = _clusters(points[~below], LINK_SPACINGS * spacing)
+    labels = _clusters(points[~below], CLUSTERS.link_spacings * spacing)
     if not _larger_than_footprint(points[~below], labels, outline, centre):
         return None
     return Platform(centre, normal, below, band, source, labels)
@@ -445,48 +476,48 @@ def _up_side(points, outline, centre, normal, band: float, spacing: float) -> fl
     Off the plane, over the plane's own footprint (the convex hull of its points, less a margin, so
     that the platform's side faces do not count), are the objects standing on it: seen from the
     scanner's side, the plane hides whatever lies under it.  The plane is a platform only when those
-    points lie on one side (at least UP_SIDE_SHARE of them, and ALL_ON_ONE_SIDE of all the points off
+    points lie on one side (at least PLATFORM.up_side_share of them, and PLATFORM.all_on_one_side of all the points off
     it but those at its outline, where its own side faces show from a low view) and it holds up most
-    of the objects (at least SUPPORTED_SHARE of the points off the plane lie over its hull): the face
+    of the objects (at least PLATFORM.supported_share of the points off the plane lie over its hull): the face
     of an object holds up nothing but itself, and other objects stand below it."""
     axes, hull = outline
     height = (points - centre) @ normal
     off = np.abs(height) > band
     flat = (points[off] - centre) @ axes.T
     reach = (flat @ hull.equations[:, :2].T + hull.equations[:, 2]).max(axis=1)  # <= 0 inside every edge
-    margin = max(HULL_MARGIN_MM, HULL_MARGIN_SPACINGS * spacing)
+    margin = max(PLATFORM.hull_margin_mm, PLATFORM.hull_margin_spacings * spacing)
     over, inside = reach <= 0, reach <= -margin
     # The platform's own side faces (seen from a low view) lie under its outline: they take no side.
     rim = np.abs(reach) < margin
     above = int(np.count_nonzero(height[off][inside] > 0))
     below = int(np.count_nonzero(inside)) - above
     side = 1.0 if above > below else -1.0
-    if max(above, below) < MIN_CLUSTER_POINTS or over.mean() < SUPPORTED_SHARE:
+    if max(above, below) < CLUSTERS.min_points or over.mean() < PLATFORM.supported_share:
         return 0.0
-    if (max(above, below) < UP_SIDE_SHARE * (above + below)
-            or np.mean(side * height[off][~rim] > 0) < ALL_ON_ONE_SIDE):
+    if (max(above, below) < PLATFORM.up_side_share * (above + below)
+            or np.mean(side * height[off][~rim] > 0) < PLATFORM.all_on_one_side):
         return 0.0
     return side
 
 
 def _larger_than_footprint(above, labels, outline, centre) -> bool:
-    """Whether the plane is a platform by its size: its hull's area is at least FOOTPRINT_RATIO times
+    """Whether the plane is a platform by its size: its hull's area is at least PLATFORM.footprint_ratio times
     that of the objects standing on it (the hull of the points ``above`` it, projected on the
-    plane, in clusters (``labels``) of MIN_CLUSTER_POINTS or more, so that stray points do not count).  A table
+    plane, in clusters (``labels``) of CLUSTERS.min_points or more, so that stray points do not count).  A table
     holds what stands on it and more; a face of one object, taken for the platform in a scene
     without one, is smaller than the objects beside it."""
     from scipy.spatial import ConvexHull, QhullError
 
     axes, hull = outline
     counts = np.bincount(labels) if len(labels) else np.zeros(0, np.int64)
-    objects = above[counts[labels] >= MIN_CLUSTER_POINTS] if len(labels) else above
-    if len(objects) < MIN_CLUSTER_POINTS:
+    objects = above[counts[labels] >= CLUSTERS.min_points] if len(labels) else above
+    if len(objects) < CLUSTERS.min_points:
         return False
     try:
         footprint = ConvexHull((objects - centre) @ axes.T)
     except QhullError:  # the objects project on a line: they have no footprint to outgrow
         return True
-    return hull.volume >= FOOTPRINT_RATIO * footprint.volume  # a 2-d hull's volume is its area
+    return hull.volume >= PLATFORM.footprint_ratio * footprint.volume  # a 2-d hull's volume is its area
 
 
 def _clusters(points: np.ndarray, link: float) -> np.ndarray:
@@ -507,11 +538,11 @@ def _clusters(points: np.ndarray, link: float) -> np.ndarray:
 
 
 def in_clusters(points: np.ndarray, spacing: float) -> np.ndarray:
-    """Which points belong to a cluster of at least MIN_CLUSTER_POINTS at the link objects are split by
-    (LINK_SPACINGS of the scan's ``spacing``): surfaces, not stray points nor mixed pixels strung
+    """Which points belong to a cluster of at least CLUSTERS.min_points at the link objects are split by
+    (CLUSTERS.link_spacings of the scan's ``spacing``): surfaces, not stray points nor mixed pixels strung
     sparsely along the rays past an edge."""
-    labels = _clusters(points, LINK_SPACINGS * spacing)
-    return np.bincount(labels)[labels] >= MIN_CLUSTER_POINTS if len(labels) else np.zeros(0, bool)
+    labels = _clusters(points, CLUSTERS.link_spacings * spacing)
+    return np.bincount(labels)[labels] >= CLUSTERS.min_points if len(labels) else np.zeros(0, bool)
 
 
 def _present(labels: np.ndarray) -> np.ndarray:
@@ -534,23 +565,23 @@ def _candidates(points, idx, labels, surface: SurfaceModel) -> list[tuple[np.nda
     alike, larger = [], []
     for members, diagonal in _clusters_of_size(points, idx, labels):
         ratio = diagonal / surface.diagonal
-        if SIZE_RATIO_RANGE[0] <= ratio <= SIZE_RATIO_RANGE[1]:
+        if CLUSTERS.size_ratio_range[0] <= ratio <= CLUSTERS.size_ratio_range[1]:
             alike.append((abs(np.log(ratio)), -len(members), members))
-        elif ratio > SIZE_RATIO_RANGE[1]:
+        elif ratio > CLUSTERS.size_ratio_range[1]:
             larger.append((ratio, -len(members), members))
     return ([(members, False) for *_, members in sorted(alike, key=lambda item: item[:2])]
             + [(members, True) for *_, members in sorted(larger, key=lambda item: item[:2])])
 
 
 def _clusters_of_size(points, idx, labels) -> list[tuple[np.ndarray, float]]:
-    """(members, bounding-box diagonal) of each cluster of MIN_CLUSTER_POINTS or more, in label order,
+    """(members, bounding-box diagonal) of each cluster of CLUSTERS.min_points or more, in label order,
     its members in their order in ``idx``: one sort for all of them, not one pass over every point per cluster."""
     if len(idx) == 0:
         return []
     order = np.argsort(labels, kind="stable")
     starts = np.flatnonzero(np.r_[True, np.diff(labels[order]) != 0])
     ends = np.r_[starts[1:], len(order)]
-    large = ends - starts >= MIN_CLUSTER_POINTS
+    large = ends - starts >= CLUSTERS.min_points
     if not large.any():
         return []
     sorted_points = points[idx[order]]
@@ -581,22 +612,22 @@ def _first_match(scan: Cloud, points, idx, labels, surface: SurfaceModel, option
         if result.matrix is not None and not stands(result.matrix):
             sunk = True
             continue
-        if result.matrix is not None and result.fitness < MIN_FITNESS[role]:
+        if result.matrix is not None and result.fitness < LOCATE.min_fitness[role]:
             near = near_points(points[members], surface, result.matrix, near_mm)
-            if near.sum() < MIN_CLUSTER_POINTS:
+            if near.sum() < CLUSTERS.min_points:
                 continue
             matched = members[near]
             result = refit(Cloud(points[matched], name=f"{role} part of a candidate in {scan.name}"), surface,
                            result, {**options, "min_fitness": MatchOptions.min_fitness})
         noisy = result.noise_mm > result.tolerance_mm  # failed only because the tolerance is below the noise
-        if (result.within_tolerance_pct < MIN_WITHIN_TOLERANCE_PCT[role] or result.fitness < MIN_FITNESS[role]
-                or noisy):
+        if (result.within_tolerance_pct < LOCATE.min_within_tolerance_pct[role]
+                or result.fitness < LOCATE.min_fitness[role] or noisy):
             if (result.status != FAILED or noisy) and (rejected is None or result.fitness > rejected.fitness):
                 rejected = result
             continue
         if result.ok:
             return result, rejected, sunk, matched
-        if result.status != FAILED and result.fitness >= GOOD_FITNESS[role]:
+        if result.status != FAILED and result.fitness >= LOCATE.good_fitness[role]:
             return result, rejected, sunk, matched  # the object: its doubt is which pose, not which cluster
         if result.status != FAILED and fallback[0] is None:
             fallback = result, matched
@@ -611,15 +642,16 @@ def _why_not_found(points, idx, labels, surface: SurfaceModel, rejected, toleran
         said = [str(r) for r in rejected.reasons if r.code == NOISE_ABOVE_TOLERANCE]
         return f"the tolerance {tolerance_mm:g} mm is below the scan's noise: " + (said[0] if said else
                                                                                   f"{rejected.noise_mm:.2f} mm")
-    if rejected is not None and rejected.fitness >= MIN_FITNESS[role]:
+    if rejected is not None and rejected.fitness >= LOCATE.min_fitness[role]:
         return (f"the best object fits the model with RMS {rejected.rms_mm:.3f} mm, but only "
                 f"{rejected.within_tolerance_pct:.0f}% of its points lie within the tolerance {tolerance_mm:g} mm "
-                f"(at least {MIN_WITHIN_TOLERANCE_PCT[role]:.0f}% needed): the tolerance seems to be below the "
+                f"(at least {LOCATE.min_within_tolerance_pct[role]:.0f}% needed): the tolerance seems to be below the "
                 "scan's noise; raise it")
     sizes = sorted((diagonal for _, diagonal in _clusters_of_size(points, idx, labels)), reverse=True)
     if not sizes:
         return "no object is left standing on the platform; is it in view?"
-    if not any(SIZE_RATIO_RANGE[0] <= size / surface.diagonal <= SIZE_RATIO_RANGE[1] for size in sizes):
+    if not any(CLUSTERS.size_ratio_range[0] <= size / surface.diagonal <= CLUSTERS.size_ratio_range[1]
+               for size in sizes):
         shown = ", ".join(f"{size:.4g}" for size in sizes[:5])
         return (f"no object on the platform is the size of the model ({surface.diagonal:.4g} mm across; the objects "
                 f"are {shown} mm across): is the model in the unit it was read in?")
@@ -643,9 +675,9 @@ def _on_model(points: np.ndarray, labels: np.ndarray, surface: SurfaceModel, U: 
     counts = np.bincount(labels, minlength=labels.max() + 1)
     on = np.bincount(labels, weights=near, minlength=len(counts))
     share = on / np.maximum(counts, 1)
-    clusters = share[labels] >= CLUSTER_SHARE
-    held = on[labels] >= MIN_CLUSTER_POINTS  # clusters the model explains a real part of
-    touching = bool((held & (share[labels] < TOUCHING_SHARE)).any())
+    clusters = share[labels] >= CLUSTERS.share
+    held = on[labels] >= CLUSTERS.min_points  # clusters the model explains a real part of
+    touching = bool((held & (share[labels] < CLUSTERS.touching_share)).any())
     return _OnModel(clusters, held & near if touching else clusters, touching)
 
 
