@@ -141,8 +141,8 @@ def calibrate(scans, workpiece, reference, *, regions=None, toolpath_points=None
 
 
 def _same_shape(first, second) -> bool:
-    """Whether two models (Clouds or SurfaceModels) have the same vertices, to InputChecks.same_shape_mm: one file given
-    for both objects, or a copy of it."""
+    """Whether two models (Clouds or SurfaceModels) have the same vertices, to INPUT_CHECKS.same_shape_mm:
+    one file given for both objects, or a copy of it."""
     a, b = (np.asarray(m.vertices if isinstance(m, SurfaceModel) else m.points) for m in (first, second))
     return a.shape == b.shape and bool(np.all(np.abs(a - b) <= INPUT_CHECKS.same_shape_mm))
 
