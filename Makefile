@@ -16,6 +16,8 @@ FREECAD_ENV   := FREECAD_USER_HOME=$(FREECAD_HOME) QTWEBENGINE_DISABLE_SANDBOX=1
 # The first X display number tried: the other-Debian chroot shares the network namespace (X's abstract
 # sockets) but not /tmp (its lock files), so it starts elsewhere and both suites can run at once.
 XVFB_DISPLAY  ?= 99
+# Extra pytest arguments for the GUI tests (e.g. GUI_PYTEST_ARGS="-k guide"); empty: all of them.
+GUI_PYTEST_ARGS ?=
 XVFB          := xvfb-run -a -n $(XVFB_DISPLAY) -s "-screen 0 1280x1024x24"
 # -rfEs: each failure, error and skip named (with why) in the CI log; --durations: the slowest tests, the first to trim (CI must stay well under 30 min).
 # PySide2 under Python 3.13 warns about every type it defines as it is imported: noise, not ours.
@@ -50,7 +52,7 @@ test-fast: setup python-packages test-peers
 	sys.stdout.flush(); sys.exit(rc)"
 
 test-gui: setup
-	$(FREECAD_ENV) $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py
+	$(FREECAD_ENV) WORKCAL_GUI_PYTEST_ARGS="$(GUI_PYTEST_ARGS)" $(XVFB) freecad $(CURDIR)/tests/gui/run_gui_tests.py
 
 # The same suites on the other Debian release (FreeCAD 1.0 from Debian 12, 0.20 from Debian 13), in a
 # debootstrap chroot cached under build/ (see .ci/other-debian).

@@ -1,7 +1,6 @@
 """Small parts on a table as a depth camera sees them (simulate.depth_camera): the table and the
 neighbours in the crop, millimetres of noise, mixed pixels at the depth edges."""
 import numpy as np
-import open3d
 import pytest
 
 from workcal_wb.core import frames
@@ -76,12 +75,30 @@ def test_a_thin_plate_whose_sides_lie_in_the_tables_band_is_never_ok_turned():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(open3d.__version__.startswith("0.16."), strict=True,
-                   reason="open defect on Debian 12's stack (open3d 0.16, numpy 1.24): the search never proposes the "
-                          "right pose and the 90 deg turn fits within the noise (docs/studies.md, the table beside a part)")
-def test_an_l_block_seen_low_through_coarse_pixels_is_never_ok_turned():
+@pytest.mark.parametrize("jitter_seed", [None, 0, 1])
+def test_an_l_block_seen_low_through_coarse_pixels_is_never_ok_turned(jitter_seed):
+    """Seen 21 deg above the table through 1.9 mm pixels, the search may settle on the L-block turned a
+    quarter about the table's normal (which it does depends on the last bits of the points: a
+    nanometre of jitter tells it another way): whichever it settles on, "ok" only when right."""
     mesh = shapes.l_block()
     scan = depth_camera_scan(mesh, 202)
-    result = match(Cloud(scan.points, name="L-block #202"), SurfaceModel(mesh, 0), tolerance_mm=TOLERANCE_MM, seed=0)
+    points = scan.points
+    if jitter_seed is not None:
+        points = points + np.random.default_rng(jitter_seed).normal(0.0, 1e-6, points.shape)
+    result = match(Cloud(points, name="L-block #202"), SurfaceModel(mesh, 0), tolerance_mm=TOLERANCE_MM, seed=0)
     if result.status == OK:
         assert largest_displacement(mesh, result.matrix, scan.U) < TOLERANCE_MM
+
+
+@pytest.mark.slow
+def test_an_l_block_turned_a_quarter_on_the_table_is_not_ok_when_given_as_the_guess():
+    """Seen low through coarse pixels, the L-block turned 90 deg about the table's normal lays its long arm
+    on the short one and fits what it covers within the noise; the scanned top face going on past its edge
+    shows only from where the camera was, which the verdict has to infer from the scan."""
+    mesh = shapes.l_block()
+    scan = depth_camera_scan(mesh, 202)
+    turned = scan.U @ frames.rigid(frames.rot_z(90.0), (30.4, -39.8, 0.0))
+    result = match(Cloud(scan.points, name="L-block #202"), SurfaceModel(mesh, 0), init=turned,
+                   tolerance_mm=TOLERANCE_MM, seed=0)
+    assert largest_displacement(mesh, result.matrix, scan.U) > 100.0  # the guess held: the pose weighed is the turned one
+    assert result.status != OK

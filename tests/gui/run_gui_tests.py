@@ -17,7 +17,10 @@ def _run():
     # FreeCAD 1.x sends sys.stdout to its Report view only; the run's log belongs on the terminal.
     sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
     # --durations: the slowest GUI tests named in the CI log, as the headless run does (CI must stay well under 30 min).
-    rc = pytest.main(["-q", "-rfEs", "--durations=10", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), TESTS])
+    # WORKCAL_GUI_PYTEST_ARGS (make test-gui GUI_PYTEST_ARGS="-k name"): a chosen few, while working on them.
+    chosen = os.environ.get("WORKCAL_GUI_PYTEST_ARGS", "").split()
+    rc = pytest.main(["-q", "-rfEs", "--durations=10", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), *chosen,
+                      TESTS])
     sys.stdout.flush()
     os._exit(int(rc))  # FreeCAD ignores QApplication.exit codes; leave with pytest's status
 

@@ -251,6 +251,10 @@ class ViewSettings:
     # viewpoint (merged views) and the verdict falls back to scan points without visibility.
     distance_extents: float = 3.0
     max_facing_away: float = 0.2
+    # The viewpoint is implied by the normals of samples inside faces, at least the gate or face_spacings
+    # model spacings from a crease; unless fewer than min_on_faces of the matched samples lie so (a curved model).
+    face_spacings: float = 2.0
+    min_on_faces: float = 0.5
     # Before a pose is failed for contradicting the view, the view is tried again from an estimated
     # viewpoint turned by this angle and twice it (see Judge.least_contradicted).
     settle_step_deg: float = 15.0
@@ -1096,6 +1100,12 @@ class Judge:
             resting = (self.support.on_plane[:len(self.sample)]
                        & (normals @ self.support.normal < -SUPPORT.resting_cos))
             matched &= ~resting
+        # A point within the gate of a crease may find its nearest sample on the face that turns away
+        # from the sensor; a few per cent of such normals pull the cone of those seen past the view.
+        inside = np.flatnonzero(matched)
+        on_face = self.surface.flat(idx[inside], max(self.gate, VIEW.face_spacings * self.surface.spacing))
+        if on_face.sum() >= VIEW.min_on_faces * len(inside):
+            matched[inside[~on_face]] = False
         points, normals = self.sample[matched], normals[matched]
         if len(points) < MIN_SCAN_POINTS:
             return
