@@ -414,3 +414,45 @@ def test_the_scan_is_drawn_shaded_by_its_surfaces_not_flat_grey(doc, tmp_path, g
     pump(0.1)
     assert scan_shading.shown(scan)
     shoot_window("scan_shaded")
+
+
+def test_a_document_closed_under_its_guide_closes_the_guide_without_an_error(doc, guide_of, pump, report):
+    """Closing the document while its guide is open: FreeCAD has deleted the GUI document by then, so the
+    guide closes without looking for its 3D view (which raised "Unknown document" into the Report view)."""
+    from workcal_wb.gui.task_panels.guide import GuidePanel
+
+    panel = guide_of("regions")
+    assert GuidePanel.current is panel and FreeCADGui.Control.activeDialog()
+    FreeCAD.closeDocument(doc.Name)
+    pump(0.2)
+    logged = report.since()
+    assert "Traceback" not in logged and "Unknown document" not in logged, logged
+    assert GuidePanel.current is None and not panel.alive() and not FreeCADGui.Control.activeDialog()
+
+
+def test_a_guide_whose_dialog_freecad_closed_leaves_the_next_guide_open_when_its_document_closes(
+        doc, guide_of, pump, report):
+    """FreeCAD may close a guide's dialog itself (another command's panel, a test's clean-up): the guide
+    still watches its document, and when that closes it must not close the dialog open then, which
+    belongs to another document's guide."""
+    from workcal_wb.gui.commands.guide import open_guide
+    from workcal_wb.gui.task_panels.guide import GuidePanel
+
+    first = guide_of("scan")
+    FreeCADGui.Control.closeDialog()
+    pump(0.1)
+    other = FreeCAD.newDocument("OtherGuideDocument")
+    try:
+        second = open_guide(other, "scan")
+        assert GuidePanel.current is second and second.alive()
+        FreeCAD.closeDocument(doc.Name)
+        pump(0.2)
+        assert second.alive() and FreeCADGui.Control.activeDialog() and GuidePanel.current is second
+        assert not first.alive()
+        logged = report.since()
+        assert "Traceback" not in logged and "Unknown document" not in logged, logged
+    finally:
+        if FreeCADGui.Control.activeDialog():
+            FreeCADGui.Control.closeDialog()
+        FreeCAD.closeDocument(other.Name)
+        pump(0.1)

@@ -207,6 +207,7 @@ class GuidePanel:
         self.doc = doc
         self.shown = None
         self.closed = False
+        self.document_gone = False  # set when the document closes under the guide
         self.exported = None  # the last program written from this guide (the export step's state)
         self._refresh_pending = False
         self.steps = {cls.NAME: cls(self) for cls in STEPS}
@@ -411,25 +412,33 @@ class GuidePanel:
     def close(self) -> None:
         if self.closed:
             return
+        shown = self._form_exists()  # else FreeCAD closed the dialog, and the one open now is another's
         self.closed = True
         FreeCAD.removeDocumentObserver(self.watcher)
         if self.labels is not None:
             self.labels.remove()
-        view = self.view()
+        view = None if self.document_gone else self.view()
         if view is not None:
             candidate_display.clear(view)
-        close_dialog()
+        if shown:
+            close_dialog()
         if GuidePanel.current is self:
             GuidePanel.current = None
 
     def document_closed(self) -> None:
-        self.labels = None  # its view went with the document
+        # Its view goes with the document: FreeCAD 1.0 has already deleted the GUI document (asking
+        # for it raises) and its 3D view may be half torn down, so nothing drawn in it is touched.
+        self.labels = None
+        self.document_gone = True
         self.close()
 
     def alive(self) -> bool:
         """Whether the panel's widgets still exist (FreeCAD may close the dialog under us)."""
+        return self._form_exists() and not self.closed
+
+    def _form_exists(self) -> bool:
         try:
             self.form.objectName()
         except (RuntimeError, AttributeError):  # its widgets deleted, or the form taken back by FreeCAD
             return False
-        return not self.closed
+        return True
