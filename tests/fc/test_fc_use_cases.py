@@ -199,3 +199,14 @@ def test_one_identity_scheme_and_older_files_lose_their_role_property(doc, tmp_p
 def test_no_gui_module_was_imported():
     """Everything above ran through workcal_wb.fc without pulling in the GUI layer."""
     assert not [m for m in sys.modules if m.startswith("workcal_wb.gui")]
+
+
+def test_the_report_views_summary_of_a_calibration_has_no_command_line_flags(monkeypatch):
+    from workcal_wb.core.result import Reason
+
+    said = []
+    monkeypatch.setattr(FreeCAD.Console, "PrintWarning", said.append)
+    result = CalibrationResult(status="failed", W=None,
+                               reasons=[Reason("not_found", "the scan shows too little of it (use --regions auto)")])
+    co.report(result, "Calibration")
+    assert len(said) == 1 and "too little of it" in said[0] and "--" not in said[0], said

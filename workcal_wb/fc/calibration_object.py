@@ -218,9 +218,12 @@ def store_result(obj, result: CalibrationResult, key: str = "") -> None:
 
 
 def report(result: CalibrationResult, label: str = "Calibration") -> None:
-    """The summary in the Report view: a message when ok, a warning otherwise."""
+    """The summary in the Report view (worded for people: no command-line flags): a message when ok, a
+    warning otherwise."""
+    from workcal_wb.core.wording import for_people
+
     (FreeCAD.Console.PrintMessage if result.ok else FreeCAD.Console.PrintWarning)(
-        f"WorkCal: {label}: {result.summary()}\n")
+        f"WorkCal: {label}: {for_people(result.summary())}\n")
 
 
 def frame_poses(result: CalibrationResult) -> dict:

@@ -15,6 +15,7 @@ import FreeCAD
 
 import workcal_wb
 from workcal_wb.core.errors import Cancelled, WorkCalError
+from workcal_wb.core.wording import for_people
 
 from . import QtCore, QtWidgets, run_modal
 
@@ -31,18 +32,6 @@ def warning(text: str) -> None:
 
 def error(text: str) -> None:
     FreeCAD.Console.PrintError(f"WorkCal: {text}\n")
-
-
-def for_people(text: str) -> str:
-    """A message from core worded for the GUI: command-line flags (``(--force)``, ``--model-units m``)
-    taken out or replaced by the GUI's own way, numbers with float noise (70.96000000000001) rounded."""
-    import re
-
-    text = re.sub(r"\s*\((?:the CLI's |use |with |see )?--[a-z][\w-]*(?: [\w.-]+)?(?:;[^)]*)?\)", "", text)
-    text = re.sub(r"(?<![\w-])--force\b", "forcing", text)
-    text = re.sub(r"(?<![\w-])--[a-z][\w-]*-units\b", "unit", text)
-    text = re.sub(r"(?<![\w-])--[a-z][\w-]*", lambda m: m.group(0)[2:].replace("-", " "), text)
-    return re.sub(r"-?\d+\.\d{5,}", lambda m: f"{float(m.group(0)):.4g}", text)
 
 
 def main_window():
