@@ -361,6 +361,22 @@ def test_a_tolerance_past_a_share_of_the_models_size_is_refused(plain):
                   options=CalibrationOptions(tolerance_mm=1e6))
 
 
+@pytest.mark.slow
+def test_a_reference_model_larger_than_every_object_is_not_searched_for(plain, monkeypatch):
+    """A reference model ten times larger than anything standing on the platform (another part's
+    file, or one in another unit) cannot be among the objects: named at once by its size, without a
+    search of the scan for it."""
+    scene, scan = plain
+    huge = scene.reference_model().transformed(np.diag([10.0, 10.0, 10.0, 1.0]))
+    huge.name = "huge.stl"
+    searched = []
+    original = regions_module._search
+    monkeypatch.setattr(regions_module, "_search", lambda *args: searched.append(args[-2]) or original(*args))
+    result = calibrate(scan.cloud(), scene.workpiece_model(), huge)
+    assert_not_found(result, r"reference object huge.stl: .*no object on the platform is the size of the model")
+    assert "reference" not in searched
+
+
 def test_the_same_model_given_for_both_objects_is_refused_before_any_search(plain, monkeypatch):
     """The workpiece's model given again as the reference's (the same file read twice): no scan can say
     which object is which, and the search for a second object of that shape would only end in "not
