@@ -4,6 +4,7 @@ FreeCAD executes this file once its main window is up (as module "run_gui_tests"
 pytest runs from a timer so the event loop and the 3D view exist; its status becomes FreeCAD's.
 """
 import os
+import shlex
 import sys
 
 from PySide import QtCore
@@ -18,7 +19,7 @@ def _run():
     sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
     # --durations: the slowest GUI tests named in the CI log, as the headless run does (CI must stay well under 30 min).
     # WORKCAL_GUI_PYTEST_ARGS (make test-gui GUI_PYTEST_ARGS="-k name"): a chosen few, while working on them.
-    chosen = os.environ.get("WORKCAL_GUI_PYTEST_ARGS", "").split()
+    chosen = shlex.split(os.environ.get("WORKCAL_GUI_PYTEST_ARGS", ""))
     rc = pytest.main(["-q", "-rfEs", "--durations=10", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), *chosen,
                       TESTS])
     sys.stdout.flush()
