@@ -10,6 +10,8 @@ from __future__ import annotations
 import copy
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -80,15 +82,15 @@ class LocateSettings:
     # A match only locates an object when most matched points lie within the tolerance and most of the candidate
     # is explained (a wrong model placed "as well as it goes" scores far lower): the reference is rigid and
     # unchanged, the workpiece may have had clay added or carved.
-    min_within_tolerance_pct: dict = field(default_factory=lambda: {
-        "reference": 80.0, "workpiece": VERDICT.min_within_tolerance_pct})
-    min_fitness: dict = field(default_factory=lambda: {"reference": 0.8, "workpiece": 0.5})
+    min_within_tolerance_pct: Mapping = field(default_factory=lambda: MappingProxyType({
+        "reference": 80.0, "workpiece": VERDICT.min_within_tolerance_pct}))
+    min_fitness: Mapping = field(default_factory=lambda: MappingProxyType({"reference": 0.8, "workpiece": 0.5}))
     # Global searches tried before a pose that explains less than good_fitness of its region is accepted,
     # unless a search comes back to a pose it found before (within these limits).
     search_attempts: int = 3
     same_pose_deg: float = 1.0
     same_pose_diagonals: float = 0.01
-    good_fitness: dict = field(default_factory=lambda: {"reference": 0.95, "workpiece": 0.9})
+    good_fitness: Mapping = field(default_factory=lambda: MappingProxyType({"reference": 0.95, "workpiece": 0.9}))
     # Where the reference touches something, its region keeps only points this close to its surface: this
     # many times the scan's noise, and at least min_on_surface_mm.
     on_surface_noises: float = 5.0
