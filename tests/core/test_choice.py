@@ -1,6 +1,7 @@
 """Choosing one pose of an ambiguous calibration: the difference from the best named in words, the user's
 choice recorded in the result (and result.json), the status "ok (chosen)" only with that record, and the
 exported program saying so in its header."""
+import dataclasses
 import json
 
 import numpy as np
@@ -8,7 +9,9 @@ import pytest
 
 from workcal_wb.core import choice, frames
 from workcal_wb.core.errors import InputError
-from workcal_wb.core.result import AMBIGUOUS, CHOSEN, OK, SYMMETRIC, Candidate, CalibrationResult, MatchResult, Reason
+from workcal_wb.core.result import (AMBIGUOUS, BEHIND_SURFACE, CHOSEN, MANY_WAYS, OK, OTHER_SIDE, RIVAL, SEARCH_DOUBT,
+                                    SYMMETRIC, TIE_UNBROKEN, UNDER_CONSTRAINED, Candidate, CalibrationResult,
+                                    MatchResult, Reason)
 from workcal_wb.core.symmetry import turn
 from workcal_wb.core.toolpath import CalibrationNotOk, export, parse_gcode
 
@@ -185,3 +188,83 @@ def test_the_command_line_lists_the_poses_and_records_the_one_chosen(monkeypatch
     assert back.status == CHOSEN and back.choice.index == 2 and back.choice.who == choice.user_name()
     program = (tmp_path / "chosen" / "toolpath_calibrated.src").read_text()
     assert "among 3 candidate poses" in krl_header(program) and "FORCED" not in program
+
+
+def doubtful(workpiece_reasons, reference=None):
+    """An ambiguous calibration whose workpiece match has a non-rival candidate and the reasons given;
+    the reference match ``reference`` (default: ok)."""
+    worse = Candidate(U @ frames.rigid(translation=[40.0, 0.0, 0.0]), score=0.2, score_ratio=0.3,
+                      standard_errors_below_best=25.0, rival=False, fits=False)
+    rival = Candidate(U @ frames.rigid(translation=[12.0, 0.0, 0.0]), score=0.8, score_ratio=0.97,
+                      standard_errors_below_best=0.4, rival=True)
+    ruled_out = Candidate(U @ frames.rigid(translation=[0.0, 9.0, 0.0]), score=0.79, score_ratio=0.96,
+                          standard_errors_below_best=0.5, rival=True, ruled_out_by="the platform")
+    symmetry = {"axis": [1.0, 0.0, 0.0], "point_mm": CENTRE.tolist(), "order": 2, "deviation_mm": 0.01,
+                "description": "half a turn about its long axis gives the same surface"}
+    workpiece = MatchResult(AMBIGUOUS, "robust", U, candidates=[Candidate(U, score=0.82), worse, rival, ruled_out],
+                            symmetries=[symmetry], reasons=workpiece_reasons)
+    reference = reference or MatchResult(OK, "robust", V)
+    gates = [{"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
+              "passed": m.status == OK, "unit": ""} for role, m in (("workpiece", workpiece), ("reference", reference))]
+    return CalibrationResult(AMBIGUOUS, frames.invert(V) @ U, U=U, V=V, workpiece=workpiece, reference=reference,
+                             quality_gates=gates, reasons=[r.within("workpiece match", "workpiece")
+                                                           for r in workpiece_reasons])
+
+
+def test_the_poses_are_only_those_tied_with_the_best():
+    rival_only = choice.poses(doubtful([Reason(RIVAL, "a rival")]), "workpiece")
+    assert len(rival_only) == 2  # the best and the rival: neither the clearly worse, nor the ruled out, nor a turn
+    assert rival_only[1].candidate.rival and rival_only[1].candidate.ruled_out_by is None
+    symmetric = choice.poses(doubtful([Reason(SYMMETRIC, "symmetric"), Reason(RIVAL, "a rival")]), "workpiece")
+    assert len(symmetric) == 3 and symmetric[2].symmetry["order"] == 2
+
+
+@pytest.mark.parametrize("code", [UNDER_CONSTRAINED, BEHIND_SURFACE, MANY_WAYS, SEARCH_DOUBT])
+def test_doubt_other_than_a_tie_is_not_settled_by_a_choice(axes, code):
+    result = doubtful([Reason(RIVAL, "a rival"), Reason(code, "other doubt")])
+    assert choice.chosen_role(result) is None
+    for index in (0, 1):
+        with pytest.raises(InputError, match="more than a tie"):
+            choice.choose(result, "workpiece", index, axes, who="mallory")
+
+
+def test_a_tie_is_not_settled_by_a_choice_while_the_other_match_is_in_doubt(axes):
+    reference = MatchResult(AMBIGUOUS, "robust", V, reasons=[Reason(BEHIND_SURFACE, "much of the view lies behind")])
+    result = doubtful([Reason(RIVAL, "a rival")], reference)
+    assert choice.chosen_role(result) is None
+    with pytest.raises(InputError, match="reference match"):
+        choice.choose(result, "workpiece", 1, axes, who="mallory")
+    with pytest.raises(InputError, match="reference match"):
+        choice.choose(result, "reference", 0, axes, who="mallory")
+
+
+def test_a_lone_pose_with_other_doubt_is_not_confirmed_by_a_choice(axes):
+    """The review's case: the workpiece under-constrained and the reference behind its surface."""
+    reference = MatchResult(AMBIGUOUS, "robust", V, reasons=[Reason(BEHIND_SURFACE, "much of the view lies behind")])
+    result = doubtful([Reason(UNDER_CONSTRAINED, "slides along X")], reference)
+    for role in ("workpiece", "reference"):
+        with pytest.raises(InputError):
+            choice.choose(result, role, 0, axes, who="mallory")
+
+
+@pytest.mark.parametrize("codes", [(RIVAL,), (SYMMETRIC,), (OTHER_SIDE, TIE_UNBROKEN), (SYMMETRIC, RIVAL)])
+def test_a_pure_tie_is_settled_by_a_choice_the_best_confirmed_too(axes, codes):
+    result = doubtful([Reason(code, "tied") for code in codes])
+    assert choice.chosen_role(result) == "workpiece"
+    for index in range(len(choice.poses(result, "workpiece"))):
+        chosen = choice.choose(result, "workpiece", index, axes, who="anna")
+        assert chosen.status == CHOSEN and chosen.choice.index == index
+
+
+def test_a_chosen_export_lets_only_the_chosen_match_status_gate_fail(axes, tmp_path):
+    from workcal_wb.core.toolpath.safety import check_calibration
+
+    chosen = choice.choose(doubtful([Reason(RIVAL, "a rival")]), "workpiece", 1, axes, who="anna")
+    assert check_calibration(chosen, force=False) is False
+    for edit in ({"code": "reference_status", "name": "reference match status", "value": "failed", "limit": OK,
+                  "passed": False, "unit": ""},
+                 {"code": "workpiece_explained", "name": "workpiece region explained", "value": 10.0, "limit": 80.0,
+                  "passed": False, "unit": ""}):
+        edited = dataclasses.replace(chosen, quality_gates=chosen.quality_gates + [edit])
+        with pytest.raises(InputError, match="contradicts itself"):
+            check_calibration(edited, force=False)

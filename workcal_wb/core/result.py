@@ -97,6 +97,10 @@ UNCERTAINTY = "uncertainty"  # the uncertainty bound exceeds the tolerance
 DISTORTION = "distortion"  # the scan's distortion moves W more than the uncertainty leaves of the tolerance
 ERROR = "error"  # an input the calibration could not use (the message names it)
 UNKNOWN = "unknown"  # a reason read from a file written before reasons had codes
+# The codes that say another pose explains the scan as well as the one found (a symmetry of the model, a
+# pose seen from the other side, a rival, a tie the scene leaves unbroken): the only doubt a person's
+# choice among the poses settles.  MANY_WAYS is not one: the poses that fit may not all be listed.
+TIE_CODES = (SYMMETRIC, OTHER_SIDE, RIVAL, TIE_UNBROKEN)
 
 
 @dataclass(frozen=True)
