@@ -268,3 +268,74 @@ def test_a_chosen_export_lets_only_the_chosen_match_status_gate_fail(axes, tmp_p
         edited = dataclasses.replace(chosen, quality_gates=chosen.quality_gates + [edit])
         with pytest.raises(InputError, match="contradicts itself"):
             check_calibration(edited, force=False)
+
+
+def chosen_file(axes, role="workpiece"):
+    """The JSON values of a result with a pose chosen (of the workpiece's rival, or the reference's)."""
+    if role == "workpiece":
+        result = doubtful([Reason(RIVAL, "a rival")])
+    else:
+        rival = Candidate(V @ frames.rigid(translation=[0.0, 7.0, 0.0]), score=0.8, score_ratio=0.97,
+                          standard_errors_below_best=0.4, rival=True)
+        reference = MatchResult(AMBIGUOUS, "robust", V, candidates=[Candidate(V, score=0.82), rival],
+                                reasons=[Reason(RIVAL, "a rival")])
+        gates = [{"code": "workpiece_status", "name": "workpiece match status", "value": OK, "limit": OK,
+                  "passed": True, "unit": ""},
+                 {"code": "reference_status", "name": "reference match status", "value": AMBIGUOUS, "limit": OK,
+                  "passed": False, "unit": ""}]
+        result = CalibrationResult(AMBIGUOUS, frames.invert(V) @ U, U=U, V=V, workpiece=MatchResult(OK, "robust", U),
+                                   reference=reference, quality_gates=gates)
+    return choice.choose(result, role, 1, axes, who="anna", when="2026-01-02T03:04:05+00:00").to_dict(
+        region_indices=False)
+
+
+def test_a_chosen_result_as_written_reads_back(axes, tmp_path):
+    for role in ("workpiece", "reference"):
+        path = tmp_path / f"{role}.json"
+        path.write_text(json.dumps(chosen_file(axes, role)))
+        back = CalibrationResult.from_json(path)
+        assert back.status == CHOSEN and back.choice.role == role
+
+
+def _edits():
+    def moved(matrix):  # a micron along X
+        return (np.asarray(matrix) @ frames.rigid(translation=[1e-3, 0.0, 0.0])).tolist()
+
+    def both_moved(data):  # U and the chosen pose alike, W left as it was
+        data["U"] = data["choice"]["matrix"] = moved(data["U"])
+
+    return {
+        "the chosen pose is not U": lambda d: d["choice"].__setitem__("matrix", np.eye(4).tolist()),
+        "the chosen pose a micron off U": lambda d: d["choice"].__setitem__("matrix", moved(d["choice"]["matrix"])),
+        "W is not V^-1 U": lambda d: d.__setitem__("W", moved(d["W"])),
+        "U and the choice moved together, W not": both_moved,
+        "the other match failed": lambda d: d["reference"].__setitem__("status", "failed"),
+        "the other match missing": lambda d: d.__setitem__("reference", None),
+        "the chosen match ok": lambda d: d["workpiece"].__setitem__("status", "ok"),
+        "the chosen match missing": lambda d: d.__setitem__("workpiece", None),
+        "the chosen match in doubt beyond the tie": lambda d: d["workpiece"]["reasons"].append(
+            {"code": UNDER_CONSTRAINED, "text": "slides along X"}),
+        "version 3": lambda d: d.__setitem__("version", 3),
+        "no one chose": lambda d: d["choice"].__setitem__("who", ""),
+        "a blank who": lambda d: d["choice"].__setitem__("who", "  "),
+        "no time": lambda d: d["choice"].__setitem__("when", ""),
+    }
+
+
+@pytest.mark.parametrize("name", sorted(_edits()))
+def test_a_chosen_result_that_contradicts_itself_is_refused_naming_the_file(axes, tmp_path, name):
+    data = chosen_file(axes)
+    _edits()[name](data)
+    path = tmp_path / "result.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InputError, match=f"{path}: .*contradicts itself"):
+        CalibrationResult.from_json(path)
+
+
+def test_a_chosen_reference_pose_is_checked_against_v(axes, tmp_path):
+    data = chosen_file(axes, "reference")
+    data["choice"]["matrix"] = data["U"]
+    path = tmp_path / "result.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InputError, match="contradicts itself"):
+        CalibrationResult.from_json(path)
