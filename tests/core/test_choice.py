@@ -159,8 +159,8 @@ def test_the_program_header_says_the_pose_was_chosen_among_the_candidates(axes, 
     assert not any(line.strip() == "X_INJECTED" for line in text.splitlines())  # the name stays inside its comment
 
 
-def test_the_command_line_lists_the_poses_and_records_the_one_chosen(monkeypatch, tmp_path, capsys):
-    from workcal_wb.cli import build_parser
+def test_the_command_line_lists_the_poses_and_chooses_one_from_the_stored_result(monkeypatch, tmp_path, capsys):
+    from workcal_wb.cli import build_parser, main
     from workcal_wb.cli import calibrate as command
 
     model = tmp_path / "box.xyz"
@@ -169,25 +169,52 @@ def test_the_command_line_lists_the_poses_and_records_the_one_chosen(monkeypatch
     gcode.write_text(SOURCE)
     monkeypatch.setattr(command, "calibrate", lambda *args, **kwargs: ambiguous())
     monkeypatch.setattr("workcal_wb.core.report.write_report", lambda *args, **kwargs: None)
-
-    def run(out, *extra):
-        args = build_parser().parse_args(["calibrate", "--scan", str(model), "--workpiece", str(model), "--reference",
-                                          str(model), "--toolpath", str(gcode), "--format", "krl", "--out",
-                                          str(out), "--no-cache", *extra])
-        return command.run(args)
-
-    assert run(tmp_path / "open") == 1  # the program refused, as without a choice
+    args = build_parser().parse_args(["calibrate", "--scan", str(model), "--workpiece", str(model), "--reference",
+                                      str(model), "--toolpath", str(gcode), "--format", "krl", "--out",
+                                      str(tmp_path / "open"), "--no-cache"])
+    assert command.run(args) == 1  # the program refused, as without a choice
     err = capsys.readouterr().err
-    assert "3 poses the scan cannot tell apart (choose one with --choose N)" in err
+    written = tmp_path / "open" / "result.json"
+    assert f"3 poses the scan cannot tell apart (choose one with: python3 -m workcal_wb choose {written} N" in err
     assert "pose 3: turned 180 deg about the part's long axis (X)" in err
-    assert json.loads((tmp_path / "open" / "result.json").read_text())["status"] == "ambiguous"
+    assert json.loads(written.read_text())["status"] == "ambiguous"
     assert not (tmp_path / "open" / "toolpath_calibrated.src").exists()
+    with pytest.raises(SystemExit):  # calibrate no longer takes a pose blind
+        build_parser().parse_args(["calibrate", "--scan", str(model), "--workpiece", str(model), "--reference",
+                                   str(model), "--choose", "3"])
 
-    assert run(tmp_path / "chosen", "--choose", "3") == 0
-    back = CalibrationResult.from_json(tmp_path / "chosen" / "result.json")
+    assert main(["choose", str(written), "--model", str(model), "--no-cache"]) == 0  # listed, nothing written
+    out = capsys.readouterr().out
+    assert "pose 2: shifted 12 mm along the part's long axis (X)" in out and "pose 3: turned 180 deg" in out
+    assert not (tmp_path / "open-chosen").exists()
+    assert main(["choose", str(written), "4", "--model", str(model), "--no-cache"]) == 2
+    assert "has 3 poses (1 to 3)" in capsys.readouterr().err
+    assert main(["choose", str(written), "3", "--model", str(model), "--no-cache", "--out",
+                 str(tmp_path / "open")]) == 2  # the calibration's own set stays as written
+    assert json.loads(written.read_text())["status"] == "ambiguous"
+
+    assert main(["choose", str(written), "3", "--model", str(model), "--no-cache"]) == 0
+    chosen = tmp_path / "open-chosen" / "result.json"
+    back = CalibrationResult.from_json(chosen)
     assert back.status == CHOSEN and back.choice.index == 2 and back.choice.who == choice.user_name()
-    program = (tmp_path / "chosen" / "toolpath_calibrated.src").read_text()
-    assert "among 3 candidate poses" in krl_header(program) and "FORCED" not in program
+    assert json.loads((tmp_path / "open-chosen" / "manifest.json").read_text())["command"] == "choose"
+    assert main(["choose", str(chosen), "2", "--model", str(model), "--no-cache", "--out",
+                 str(tmp_path / "again")]) == 2  # chosen already
+    program = tmp_path / "prog.src"
+    assert main(["toolpath", "--in", str(gcode), "--calibration", str(chosen), "--out", str(program)]) == 0
+    assert "among 3 candidate poses" in krl_header(program.read_text()) and "FORCED" not in program.read_text()
+
+
+def test_the_command_line_says_when_an_ambiguous_result_has_no_tie_to_choose(tmp_path, capsys):
+    from workcal_wb.cli import main
+
+    model = tmp_path / "box.xyz"
+    np.savetxt(model, box_points(), fmt="%.4f")
+    path = tmp_path / "result.json"
+    doubtful([Reason(RIVAL, "a rival"), Reason(UNDER_CONSTRAINED, "slides along X")]).to_json(path)
+    assert main(["choose", str(path), "1", "--model", str(model), "--no-cache"]) == 2
+    err = capsys.readouterr().err
+    assert "no tie between poses to choose from" in err and "more than a tie" in err
 
 
 def doubtful(workpiece_reasons, reference=None):
