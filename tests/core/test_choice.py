@@ -366,3 +366,29 @@ def test_a_chosen_reference_pose_is_checked_against_v(axes, tmp_path):
     path.write_text(json.dumps(data))
     with pytest.raises(InputError, match="contradicts itself"):
         CalibrationResult.from_json(path)
+
+
+def reference_tie():
+    """An ambiguous calibration whose reference match has a rival turned a quarter about Z."""
+    rival = Candidate(V @ turn([0.0, 0.0, 1.0], 90.0, [20.0, 10.0, 0.0]), score=0.8, score_ratio=0.97,
+                      standard_errors_below_best=0.4, rival=True)
+    reference = MatchResult(AMBIGUOUS, "robust", V, candidates=[Candidate(V, score=0.82), rival],
+                            reasons=[Reason(RIVAL, "a rival")])
+    gates = [{"code": "reference_status", "name": "reference match status", "value": AMBIGUOUS, "limit": OK,
+              "passed": False, "unit": ""}]
+    return CalibrationResult(AMBIGUOUS, frames.invert(V) @ U, U=U, V=V, workpiece=MatchResult(OK, "robust", U),
+                             reference=reference, quality_gates=gates)
+
+
+def test_the_workpiece_is_placed_where_the_robot_would_take_it_for_each_pose(axes):
+    result = reference_tie()
+    placed = choice.workpiece_placements(result, "reference")
+    np.testing.assert_allclose(placed[0], U, atol=1e-9)  # the best: the workpiece where the scan shows it
+    chosen = choice.choose(result, "reference", 1, axes, who="anna")
+    # Seen through the best reference pose (how the scan shows the robot base), W of the choice.
+    np.testing.assert_allclose(frames.invert(V) @ placed[1], chosen.W, atol=1e-9)
+    assert not np.allclose(placed[1], choice.poses(result, "reference")[1].matrix)  # not at the reference's pose
+    np.testing.assert_allclose(choice.workpiece_placements(chosen, "reference")[1], placed[1], atol=1e-9)
+    workpiece = choice.workpiece_placements(ambiguous(), "workpiece")
+    for placement, pose in zip(workpiece, choice.poses(ambiguous(), "workpiece")):
+        np.testing.assert_allclose(placement, pose.matrix)

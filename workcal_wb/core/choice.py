@@ -156,6 +156,18 @@ def poses(result: CalibrationResult, role: str) -> list[Pose]:
     return out
 
 
+def workpiece_placements(result: CalibrationResult, role: str) -> list[np.ndarray]:
+    """Where the workpiece frame X lies in the scan for each pose of ``role`` (as ``poses`` lists them):
+    where the robot would take it were that pose chosen, seen through the best reference pose (as the
+    scan shows the robot base).  A workpiece pose U_k places it itself; a reference pose V_k gives
+    W_k = V_k^-1 U, so the workpiece at V_0 V_k^-1 U."""
+    found = poses(result, role)
+    if role == "workpiece" or not found or result.U is None:
+        return [p.matrix for p in found]
+    best = found[0].matrix
+    return [best @ frames.invert(p.matrix) @ result.U for p in found]
+
+
 def why_not(result: CalibrationResult, role: str) -> str | None:
     """Why a person cannot settle ``role``'s doubt by choosing one of its poses, in plain words; None
     when they can: the calibration and that match are ambiguous only because poses tie (every reason
