@@ -3,6 +3,7 @@ choice recorded in the result (and result.json), the status "ok (chosen)" only w
 exported program saying so in its header."""
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -148,15 +149,40 @@ def test_the_program_header_says_the_pose_was_chosen_among_the_candidates(axes, 
     path = parse_gcode(SOURCE, "part.nc")
     with pytest.raises(CalibrationNotOk):  # without a choice: refused unless forced, as before
         export(path, ambiguous(), "krl", tmp_path / "refused.src")
-    chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who="anna\nX_INJECTED", when="2026-01-02T03:04:05+00:00")
+    chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who="anna", when="2026-01-02T03:04:05+00:00")
     export(path, chosen, "krl", tmp_path / "prog.src", calibration_source="result.json")
     text = (tmp_path / "prog.src").read_text()
     assert "FORCED" not in text
     assert "calibration status ok (chosen)" in text
     header = krl_header(text)
-    assert "pose chosen by the user anna X_INJECTED on 2026-01-02T03:04:05+00:00 among 3 candidate poses" in header
+    assert "pose chosen by the user anna on 2026-01-02T03:04:05+00:00 among 3 candidate poses" in header
     assert "turned 180 deg about the part's long axis (X)" in header
-    assert not any(line.strip() == "X_INJECTED" for line in text.splitlines())  # the name stays inside its comment
+
+
+# Characters textwrap keeps inside a word but str.splitlines (and so a reader of the program) breaks a
+# line at, and NUL, which ends a string on some controllers.
+LINE_BREAKERS = ("\x1c", "\x85", "\u2028", "\x00", "\n", "\r")
+# Each format's comment line (stripped), as its controller reads it: nothing after it is code.
+COMMENT_LINE = {
+    "krl": lambda s: s.startswith(";") and not re.match(r";\s*(END)?FOLD", s, re.IGNORECASE),
+    "rapid": lambda s: s.startswith("!"),
+    "urscript": lambda s: s.startswith("#"),
+    "fanuc": lambda s: re.fullmatch(r"(\d+:\s*)?![^;]*;", s) is not None,
+    "gcode": lambda s: re.fullmatch(r"\([^()]*\)", s) is not None,
+}
+EXTENSIONS = {"krl": ".src", "rapid": ".mod", "urscript": ".script", "fanuc": ".ls", "gcode": ".nc"}
+
+
+@pytest.mark.parametrize("fmt", sorted(COMMENT_LINE))
+def test_the_user_name_stays_inside_its_comment(axes, tmp_path, fmt):
+    who = "anna" + "".join(f"{c}X_INJECTED{i} " for i, c in enumerate(LINE_BREAKERS))
+    chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who=who, when="2026-01-02T03:04:05+00:00")
+    out = tmp_path / f"prog{EXTENSIONS[fmt]}"
+    export(parse_gcode(SOURCE, "part.nc"), chosen, fmt, out, calibration_source="result.json",
+           **({"machine": "5axis-tcp"} if fmt == "gcode" else {}))
+    marked = [line for line in out.read_text().splitlines() if "X_INJECTED" in line]
+    assert marked  # the name is in the header
+    assert all(COMMENT_LINE[fmt](line.strip()) for line in marked), marked
 
 
 def test_the_command_line_lists_the_poses_and_chooses_one_from_the_stored_result(monkeypatch, tmp_path, capsys):
