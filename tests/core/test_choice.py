@@ -418,3 +418,24 @@ def test_the_workpiece_is_placed_where_the_robot_would_take_it_for_each_pose(axe
     workpiece = choice.workpiece_placements(ambiguous(), "workpiece")
     for placement, pose in zip(workpiece, choice.poses(ambiguous(), "workpiece")):
         np.testing.assert_allclose(placement, pose.matrix)
+
+
+def test_the_program_header_says_the_failed_status_gate_was_resolved_by_the_choice(axes, tmp_path):
+    chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who="anna", when="2026-01-02T03:04:05+00:00")
+    export(parse_gcode(SOURCE, "part.nc"), chosen, "krl", tmp_path / "prog.src", calibration_source="result.json")
+    header = krl_header((tmp_path / "prog.src").read_text())
+    assert "gate workpiece match status = ambiguous, limit ok: FAILED (resolved by the person's choice below)" in header
+    assert header.index("resolved by the person's choice below") < header.index("pose chosen by the user anna")
+    assert header.count("resolved by the person's choice") == 1
+
+
+def test_the_report_gives_each_status_one_css_class_of_its_own(axes):
+    from workcal_wb.core import report
+    from workcal_wb.core.result import STATUSES
+
+    assert set(report.STATUS_CLASS) == set(STATUSES)
+    assert all(re.fullmatch(r"[a-z]+", name) for name in report.STATUS_CLASS.values())
+    assert len(set(report.STATUS_CLASS.values())) == len(STATUSES)
+    chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who="anna")
+    assert f'class="banner {report.STATUS_CLASS[CHOSEN]}"' in report._banner(chosen)
+    assert f".{report.STATUS_CLASS[CHOSEN]}{{" in report.CSS
