@@ -1,10 +1,13 @@
 """Choosing one pose of an ambiguous calibration, as a person looking at them does.
 
 ``poses(result, role)`` lists the poses of a match the scan could not tell apart (the best, the rivals
-the match found, the turns the model's symmetries give), ``difference`` says in words how one differs
-from the best (a turn about one of the part's axes, a shift along one, in mm and degrees), and
-``choose`` gives the result with that pose as U (or V), W = V^-1 U again, the status "ok (chosen)" and
-the record of the choice (``result.Choice``).
+the match found that nothing ruled out, the turns the model's symmetries give when the match says it is
+symmetric), ``difference`` says in words how one differs from the best (a turn about one of the part's
+axes, a shift along one, in mm and degrees), and ``choose`` gives the result with that pose as U (or V),
+W = V^-1 U again, the status "ok (chosen)" and the record of the choice (``result.Choice``).
+
+A choice settles a tie and nothing else: only a match ambiguous by tie codes alone (result.TIE_CODES),
+beside a match that is ok, offers one (``why_not`` says in words why another does not).
 """
 from __future__ import annotations
 
