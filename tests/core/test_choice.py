@@ -439,3 +439,12 @@ def test_the_report_gives_each_status_one_css_class_of_its_own(axes):
     chosen = choice.choose(ambiguous(), "workpiece", 2, axes, who="anna")
     assert f'class="banner {report.STATUS_CLASS[CHOSEN]}"' in report._banner(chosen)
     assert f".{report.STATUS_CLASS[CHOSEN]}{{" in report.CSS
+
+
+@pytest.mark.parametrize("entry", [{"index": [1], "difference": "x"}, {"index": 1, "difference": 7},
+                                   {"index": 1, "difference": "x", "score_ratio": "high"}])
+def test_the_evidence_of_a_choice_is_checked_when_read(axes, entry):
+    data = chosen_file(axes)
+    data["choice"]["evidence"][1] = entry
+    with pytest.raises(InputError, match="result.json: choice: .*evidence"):
+        CalibrationResult.from_dict(data, "result.json")

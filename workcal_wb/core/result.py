@@ -199,6 +199,10 @@ class Candidate:
             raise InputError(f"{source}: {exc}") from None
 
 
+# The match's numbers a choice's evidence keeps of a pose (Candidate fields).
+_EVIDENCE_NUMBERS = ("score", "score_ratio", "standard_errors_below_best")
+
+
 @dataclass
 class Choice:
     """A person's choice of one pose among those an ambiguous calibration could not tell apart: who
@@ -240,6 +244,12 @@ class Choice:
         if missing:
             raise InputError(f"{source}: the choice has no {missing[0]}")
         _check_items(values.get("evidence", []), (dict,), source, "choice evidence")
+        for entry in values.get("evidence", []):
+            if not (_is(entry.get("index"), (int,)) and _is(entry.get("difference", ""), _TEXT)
+                    and _is(entry.get("symmetry", ""), _TEXT)
+                    and all(_is(entry.get(key, 0), _NUMBER) for key in _EVIDENCE_NUMBERS)):
+                raise InputError(f"{source}: every entry of the choice evidence needs index (a whole number), "
+                                 f"difference and symmetry as strings and {', '.join(_EVIDENCE_NUMBERS)} as numbers")
         try:
             return cls(**values)
         except (TypeError, ValueError, InputError) as exc:
