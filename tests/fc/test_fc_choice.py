@@ -8,7 +8,7 @@ FreeCAD = pytest.importorskip("FreeCAD")
 from workcal_wb.core import frames  # noqa: E402
 from workcal_wb.core.errors import InputError  # noqa: E402
 from workcal_wb.core.geometry import Cloud  # noqa: E402
-from workcal_wb.core.result import AMBIGUOUS, CHOSEN  # noqa: E402
+from workcal_wb.core.result import AMBIGUOUS, CHOSEN, UNDER_CONSTRAINED, Reason  # noqa: E402
 from workcal_wb.core.simulate import shapes  # noqa: E402
 from workcal_wb.core.simulate.scanner import Scanner  # noqa: E402
 from workcal_wb.core.simulate.scene import build_scene  # noqa: E402
@@ -84,3 +84,23 @@ def test_only_an_ambiguous_calibration_offers_a_choice(ambiguous):
     co.choose_pose(cal, 1)
     with pytest.raises(InputError, match="ambiguous"):  # chosen already: calibrate again to choose anew
         co.choose_pose(cal, 2)
+
+
+def test_a_calibration_whose_inputs_changed_is_recomputed_before_a_choice(ambiguous):
+    doc, cal = ambiguous
+    stored = cal.ResultJson
+    cal.Tolerance = 2 * cal.Tolerance.Value  # not recomputed: the result is of the inputs before
+    with pytest.raises(InputError, match="recompute first"):
+        co.choose_pose(cal, 1)
+    assert cal.Status == AMBIGUOUS and cal.ResultJson == stored
+
+
+def test_an_ambiguous_calibration_without_a_tie_says_so(ambiguous):
+    doc, cal = ambiguous
+    result = result_of(cal)
+    doubt = Reason(UNDER_CONSTRAINED, "a motion the matched surface does not fix")
+    result.workpiece.reasons = result.workpiece.reasons + [doubt]
+    co.store_result(cal, result, cal.InputsKey)
+    with pytest.raises(InputError, match="no tie between poses to choose from: .*more than a tie"):
+        co.choose_pose(cal, 1)
+    assert cal.Status == AMBIGUOUS

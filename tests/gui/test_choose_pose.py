@@ -119,3 +119,17 @@ def test_the_poses_are_drawn_named_and_one_is_chosen(doc, ambiguous_guide, pump,
     pump(0.2)
     assert cal.Status == CHOSEN and result_of(cal).choice == record
     assert os.path.getsize(program) > 0
+
+
+def test_a_deleted_model_hides_the_poses_without_a_traceback(doc, ambiguous_guide, pump):
+    guide = ambiguous_guide
+    page = guide.steps["result"]
+    cal = guide.calibration()
+    _, result = page.result()
+    doc.removeObject(cal.Workpiece.Name)  # its result stays until recomputed; the panel refreshes on a timer
+    page._shown_key = None  # as a refresh after any change to the result would
+    assert page.shown_poses(cal, result, "workpiece") == []
+    page._fill_poses(cal, result)
+    assert not page.poses.isVisible()
+    guide.go("result")
+    pump(0.2)

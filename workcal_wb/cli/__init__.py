@@ -16,7 +16,7 @@ import traceback
 
 from workcal_wb import __version__
 
-SUBCOMMANDS = ("demo", "calibrate", "toolpath", "robots", "simulate", "study", "match", "bench")  # module names in workcal_wb.cli, in the order --help lists them
+SUBCOMMANDS = ("demo", "calibrate", "choose", "toolpath", "robots", "simulate", "study", "match", "bench")  # module names in workcal_wb.cli, in the order --help lists them
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_CANNOT_WRITE, EXIT_MISSING_DEPENDENCY = 0, 1, 2, 3, 4
 EXIT_INTERNAL_ERROR = 70  # EX_SOFTWARE

@@ -187,3 +187,10 @@ def read_cad_model(path, units: str):
                          "freecadcmd (see the README), or export the model as STL") from None
     return read_model_file(path, units)
 
+
+def read_model(path, units: str, cache, seed: int):
+    """A model file, prepared (a SurfaceModel, from ``cache`` when it holds it); CAD solids (STEP,
+    IGES, BREP) are tessellated through FreeCAD when it is there."""
+    if not is_cad_file(path):
+        return cache.model_file(path, units=units, seed=seed, unit_option="--model-units")
+    return cache.model(read_cad_model(path, units), seed=seed)

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from workcal_wb.cli import EXIT_FAILED, EXIT_OK
-from workcal_wb.cli.arguments import (UNITS, add_cache_options, count, finite, input_file, is_cad_file, keep_models,
-                                      model_cache, positive, read_cad_model, seed)
+from workcal_wb.cli.arguments import (UNITS, add_cache_options, finite, input_file, keep_models, model_cache, positive,
+                                      read_model, seed)
 from workcal_wb.cli.toolpath import add_machine_options, forced_warnings, read_options, robot_options, way_out
 from workcal_wb.core import choice
 from workcal_wb.core.calibration import CalibrationOptions, calibrate, merge_scans
@@ -17,7 +17,7 @@ from workcal_wb.core.files import read_text
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.outputs import OutputFolder
 from workcal_wb.core.readers import LARGE_SCAN_POINTS, read_cloud
-from workcal_wb.core.result import FAILED
+from workcal_wb.core.result import AMBIGUOUS, FAILED
 from workcal_wb.core.toolpath import FORMATS, ExportRefused, ReachRefused, export, read_gcode
 from workcal_wb.core.toolpath.transform import path_points
 
@@ -61,10 +61,6 @@ def add_parser(subparsers):
                         "'comment viewpoint X Y Z', else estimated)")
     p.add_argument("--up", type=finite, nargs=3, metavar=("X", "Y", "Z"),
                    help="the platform's up direction in the scan's coordinates (default: from the data, any frame)")
-    p.add_argument("--choose", type=count, metavar="N",
-                   help="when the calibration is ambiguous, use its pose N (1: the best) as a run without --choose "
-                        "lists them; result.json records who chose which among the poses, and the status becomes "
-                        "'ok (chosen)'")
     p.add_argument("--force", action="store_true",
                    help="write the calibrated toolpath even if the calibration failed its gates (marked FORCED)")
     add_machine_options(p)
@@ -107,14 +103,6 @@ def read_indices(path, scan_points: int) -> np.ndarray:
     return np.array(values, dtype=np.int64)
 
 
-def read_model(path, units: str, cache, seed: int):
-    """A model file, prepared (a SurfaceModel, from ``cache`` when it holds it); CAD solids (STEP,
-    IGES, BREP) are tessellated through FreeCAD when it is there."""
-    if not is_cad_file(path):
-        return cache.model_file(path, units=units, seed=seed, unit_option="--model-units")
-    return cache.model(read_cad_model(path, units), seed=seed)
-
-
 def warn(clouds) -> None:
     for cloud in clouds:
         for warning in cloud.warnings:
@@ -141,7 +129,6 @@ def run(args) -> int:
                                      scanner_origin=args.scanner_origin, up=args.up)
         result = calibrate(merged, workpiece, reference, regions=_regions(args, merged), options=options,
                            toolpath_points=None if toolpath is None else path_points(toolpath)[0])
-        result = _chosen(result, args.choose, {"workpiece": workpiece, "reference": reference})
 
         # What the cell needs first (result.json and the program) goes in first; the report follows.
         result.to_json(outputs.file("result.json"))
@@ -157,6 +144,8 @@ def run(args) -> int:
             raise
     print(result.summary())
     print(f"wrote {args.out}: {', '.join(manifest['files'])}")
+    _list_poses(result, {"workpiece": args.workpiece, "reference": args.reference},
+                {"workpiece": workpiece, "reference": reference}, Path(args.out) / "result.json")
     if refused:
         print(f"workcal calibrate: toolpath not written: {refused}", file=sys.stderr)
     for line in forced:
@@ -165,26 +154,22 @@ def run(args) -> int:
     return EXIT_OK if result.status != FAILED and not refused else EXIT_FAILED
 
 
-def _chosen(result, number, models: dict):
-    """The result with pose ``number`` (1: the best) chosen when it is ambiguous; the poses in words
-    on stderr when it is and none was chosen."""
+def _list_poses(result, files: dict, models: dict, written: Path) -> None:
+    """On stderr, when the result is ambiguous: the poses a person may choose among, each by how it
+    differs from the best, and how to choose one (``workcal choose``); or why there is none to choose."""
+    from workcal_wb.cli.choose import print_poses
+
+    if result.status != AMBIGUOUS:
+        return
     role = choice.chosen_role(result)
     if role is None:
-        if number is not None:
-            print(f"workcal calibrate: warning: --choose {number} not used: the calibration is {result.status!r}, "
-                  "not ambiguous", file=sys.stderr)
-        return result
-    axes = choice.part_axes(models[role].points)
+        print(f"workcal calibrate: ambiguous, with no tie between poses to choose from: "
+              f"{choice.no_choice_words(result)}", file=sys.stderr)
+        return
     poses = choice.poses(result, role)
-    if number is None:
-        print(f"workcal calibrate: the {role} match left {len(poses)} poses the scan cannot tell apart "
-              "(choose one with --choose N):", file=sys.stderr)
-        for i, pose in enumerate(poses, 1):
-            print(f"  pose {i}: {choice.difference(poses[0].matrix, pose.matrix, axes).words}", file=sys.stderr)
-        return result
-    if number > len(poses):
-        raise InputError(f"--choose {number}: the {role} match has {len(poses)} poses (1 to {len(poses)})")
-    return choice.choose(result, role, number - 1, axes, choice.user_name())
+    print(f"workcal calibrate: the {role} match left {len(poses)} poses the scan cannot tell apart (choose one "
+          f"with: python3 -m workcal_wb choose {written} N --model {files[role]}):", file=sys.stderr)
+    print_poses(poses, choice.part_axes(models[role].points), sys.stderr)
 
 
 def _program(args, toolpath, result, outputs, workpiece) -> tuple:

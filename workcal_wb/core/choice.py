@@ -1,10 +1,13 @@
 """Choosing one pose of an ambiguous calibration, as a person looking at them does.
 
 ``poses(result, role)`` lists the poses of a match the scan could not tell apart (the best, the rivals
-the match found, the turns the model's symmetries give), ``difference`` says in words how one differs
-from the best (a turn about one of the part's axes, a shift along one, in mm and degrees), and
-``choose`` gives the result with that pose as U (or V), W = V^-1 U again, the status "ok (chosen)" and
-the record of the choice (``result.Choice``).
+the match found that nothing ruled out, the turns the model's symmetries give when the match says it is
+symmetric), ``difference`` says in words how one differs from the best (a turn about one of the part's
+axes, a shift along one, in mm and degrees), and ``choose`` gives the result with that pose as U (or V),
+W = V^-1 U again, the status "ok (chosen)" and the record of the choice (``result.Choice``).
+
+A choice settles a tie and nothing else: only a match ambiguous by tie codes alone (result.TIE_CODES),
+beside a match that is ok, offers one (``why_not`` says in words why another does not).
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from . import frames
 from .errors import InputError
-from .result import AMBIGUOUS, CHOSEN, Candidate, CalibrationResult, Choice
+from .result import AMBIGUOUS, CHOSEN, OK, SYMMETRIC, TIE_CODES, Candidate, CalibrationResult, Choice, codes
 from .symmetry import turn
 
 ROLES = ("workpiece", "reference")
@@ -131,10 +134,14 @@ def _match(result: CalibrationResult, role: str):
     return result.workpiece if role == "workpiece" else result.reference
 
 
+def _other(role: str) -> str:
+    return ROLES[1 - ROLES.index(role)]
+
+
 def poses(result: CalibrationResult, role: str) -> list[Pose]:
     """The poses of ``role``'s model the calibration could not tell apart, best first: the pose the
-    calibration found (kept first after a choice), the rivals its match found and the turns the
-    model's symmetries give."""
+    calibration found (kept first after a choice), the rivals its match found that nothing ruled out
+    and, when the match says the model is symmetric, the turns the model's symmetries give."""
     if result.choice is not None and result.choice.role == role:
         best = result.choice.best
     else:
@@ -143,21 +150,67 @@ def poses(result: CalibrationResult, role: str) -> list[Pose]:
         return []
     match = _match(result, role)
     found = list(getattr(match, "candidates", None) or [])
-    out = [Pose(best, found[0] if found else None)] + [Pose(c.matrix, c) for c in found[1:]]
-    for symmetry in getattr(match, "symmetries", None) or []:
-        angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else ANY_ANGLE_TURN_DEG
-        out.append(Pose(best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry=symmetry))
+    out = [Pose(best, found[0] if found else None)]
+    out += [Pose(c.matrix, c) for c in found[1:] if c.rival and not c.ruled_out_by]
+    if SYMMETRIC in codes(getattr(match, "reasons", None) or []):
+        for symmetry in match.symmetries:
+            angle = 360.0 / symmetry["order"] if symmetry["order"] >= 2 else ANY_ANGLE_TURN_DEG
+            out.append(Pose(best @ turn(symmetry["axis"], angle, symmetry["point_mm"]), symmetry=symmetry))
     return out
 
 
+def workpiece_placements(result: CalibrationResult, role: str) -> list[np.ndarray]:
+    """Where the workpiece frame X lies in the scan for each pose of ``role`` (as ``poses`` lists them):
+    where the robot would take it were that pose chosen, seen through the best reference pose (as the
+    scan shows the robot base).  A workpiece pose U_k places it itself; a reference pose V_k gives
+    W_k = V_k^-1 U, so the workpiece at V_0 V_k^-1 U."""
+    found = poses(result, role)
+    if role == "workpiece" or not found or result.U is None:
+        return [p.matrix for p in found]
+    best = found[0].matrix
+    return [best @ frames.invert(p.matrix) @ result.U for p in found]
+
+
+def why_not(result: CalibrationResult, role: str) -> str | None:
+    """Why a person cannot settle ``role``'s doubt by choosing one of its poses, in plain words; None
+    when they can: the calibration and that match are ambiguous only because poses tie (every reason
+    a tie code), the other match is ok and no quality gate but that match's status failed."""
+    if role not in ROLES:
+        return f"a choice is of the workpiece or the reference match, not of {role!r}"
+    if result.status != AMBIGUOUS:
+        return f"only an ambiguous calibration's poses can be chosen; this one is {result.status!r}"
+    match, other = _match(result, role), _match(result, _other(role))
+    if match is None or match.status != AMBIGUOUS:
+        return (f"the {role} match is {getattr(match, 'status', 'missing')!r}, not ambiguous: it has no tie "
+                "between poses to choose from")
+    beyond = [r for r in match.reasons if r.code not in TIE_CODES]
+    if beyond or not match.reasons:
+        said = f": {beyond[0]}" if beyond else ""
+        return (f"the {role} match is in doubt for more than a tie between poses the scan cannot tell apart"
+                f"{said}; choosing a pose cannot settle that: calibrate again")
+    if other is None or other.status != OK:
+        return (f"the {_other(role)} match is {getattr(other, 'status', 'missing')!r}: choosing a {role} pose "
+                f"cannot settle that; calibrate again")
+    failed = [g for g in result.quality_gates if g.get("passed") is False and g.get("code") != f"{role}_status"]
+    if failed:
+        return f"the calibration's {failed[0].get('name', 'quality gate')} failed: choosing a pose cannot settle that"
+    if len(poses(result, role)) < 2:
+        return f"the {role} match lists no other pose tied with the best to choose from"
+    return None
+
+
 def chosen_role(result: CalibrationResult) -> str | None:
-    """The match a person may choose a pose of: the one with several poses, when the result is
-    ambiguous (or was chosen); None otherwise."""
+    """The match a person may choose a pose of (or chose one of): the one whose poses tie, when that
+    is all that keeps the calibration ambiguous; None otherwise."""
     if result.choice is not None:
         return result.choice.role
-    if result.status != AMBIGUOUS:
-        return None
-    return next((role for role in ROLES if len(poses(result, role)) > 1), None)
+    return next((role for role in ROLES if why_not(result, role) is None), None)
+
+
+def no_choice_words(result: CalibrationResult) -> str:
+    """Why an ambiguous calibration offers no pose to choose, in plain words (for each match in doubt)."""
+    said = [why_not(result, role) for role in ROLES if getattr(_match(result, role), "status", OK) != OK]
+    return "; ".join(w for w in said if w) or "no match lists poses tied with its best"
 
 
 def evidence(pose: Pose, index: int, named: Difference) -> dict:
@@ -183,11 +236,11 @@ def choose(result: CalibrationResult, role: str, index: int, axes: PartAxes, who
            when: str | None = None) -> CalibrationResult:
     """The ambiguous ``result`` with pose ``index`` of ``role``'s match chosen by ``who`` (the OS user
     name) at ``when`` (ISO 8601; default now): that pose as U (or V), W = V^-1 U, status "ok (chosen)"
-    and the record.  ``axes``: the ``role`` model's (part_axes), to name each pose's difference."""
-    if result.status != AMBIGUOUS:
-        raise InputError(f"only an ambiguous calibration's poses can be chosen; this one is {result.status!r}")
-    if chosen_role(result) != role:
-        raise InputError(f"the {role} match of this calibration has no other pose to choose")
+    and the record.  Only a tie between poses is settled so (``why_not`` says why else not); choosing
+    the best (0) is a person confirming it.  ``axes``: the ``role`` model's (part_axes), to name each pose's difference."""
+    refused = why_not(result, role)
+    if refused:
+        raise InputError(refused)
     found = poses(result, role)
     if not 0 <= index < len(found):
         raise InputError(f"the {role} match has {len(found)} poses (0 to {len(found) - 1}), no pose {index}")

@@ -57,6 +57,9 @@ STATUS_TEXT = {
     CHOSEN: ("OK (CHOSEN)", "W can be used: the scan could not tell several poses apart and a person chose one."),
 }
 
+# The CSS class of each status's banner: one name each ("ok (chosen)" as it is would be two classes).
+STATUS_CLASS = {OK: "ok", AMBIGUOUS: "ambiguous", FAILED: "failed", CHOSEN: "chosen"}
+
 CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:0 auto;max-width:1100px;
 padding:1.2em;color:#222;line-height:1.4}
@@ -67,7 +70,7 @@ vertical-align:top}th{background:#f2f2f2}td.l,th.l{text-align:left}
 table.matrix td{font-family:ui-monospace,Menlo,Consolas,monospace;border:none;padding:.1em .7em}
 table.matrix{border-left:2px solid #444;border-right:2px solid #444}
 .banner{padding:.8em 1em;border-radius:6px;margin:1em 0;color:#fff}.banner b{font-size:1.3em}
-.ok{background:#2e7d32}.ambiguous{background:#ef8f00}.failed{background:#c62828}
+.ok,.chosen{background:#2e7d32}.ambiguous{background:#ef8f00}.failed{background:#c62828}
 .pass{color:#2e7d32;font-weight:bold}.miss{color:#c62828;font-weight:bold}
 .poses{display:flex;flex-wrap:wrap;gap:1.5em}.note{color:#666;font-size:.9em}
 img{max-width:100%;border:1px solid #ddd}code{font-family:ui-monospace,Menlo,Consolas,monospace}
@@ -562,7 +565,7 @@ def _banner(calibration: CalibrationResult) -> str:
     reasons = "".join(f"<li>{_e(r)}</li>" for r in calibration.reasons)
     if calibration.choice is not None:
         reasons += f"<li>{_e(choice_words(calibration.choice))}</li>"
-    return (f'<div class="banner {calibration.status}" id="status"><b>{label}</b> &nbsp; {_e(text)}'
+    return (f'<div class="banner {STATUS_CLASS[calibration.status]}" id="status"><b>{label}</b> &nbsp; {_e(text)}'
             + (f"<ul>{reasons}</ul>" if reasons else "") + "</div>")
 
 

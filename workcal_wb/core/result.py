@@ -97,6 +97,10 @@ UNCERTAINTY = "uncertainty"  # the uncertainty bound exceeds the tolerance
 DISTORTION = "distortion"  # the scan's distortion moves W more than the uncertainty leaves of the tolerance
 ERROR = "error"  # an input the calibration could not use (the message names it)
 UNKNOWN = "unknown"  # a reason read from a file written before reasons had codes
+# The codes that say another pose explains the scan as well as the one found (a symmetry of the model, a
+# pose seen from the other side, a rival, a tie the scene leaves unbroken): the only doubt a person's
+# choice among the poses settles.  MANY_WAYS is not one: the poses that fit may not all be listed.
+TIE_CODES = (SYMMETRIC, OTHER_SIDE, RIVAL, TIE_UNBROKEN)
 
 
 @dataclass(frozen=True)
@@ -195,6 +199,10 @@ class Candidate:
             raise InputError(f"{source}: {exc}") from None
 
 
+# The match's numbers a choice's evidence keeps of a pose (Candidate fields).
+_EVIDENCE_NUMBERS = ("score", "score_ratio", "standard_errors_below_best")
+
+
 @dataclass
 class Choice:
     """A person's choice of one pose among those an ambiguous calibration could not tell apart: who
@@ -236,6 +244,12 @@ class Choice:
         if missing:
             raise InputError(f"{source}: the choice has no {missing[0]}")
         _check_items(values.get("evidence", []), (dict,), source, "choice evidence")
+        for entry in values.get("evidence", []):
+            if not (_is(entry.get("index"), (int,)) and _is(entry.get("difference", ""), _TEXT)
+                    and _is(entry.get("symmetry", ""), _TEXT)
+                    and all(_is(entry.get(key, 0), _NUMBER) for key in _EVIDENCE_NUMBERS)):
+                raise InputError(f"{source}: every entry of the choice evidence needs index (a whole number), "
+                                 f"difference and symmetry as strings and {', '.join(_EVIDENCE_NUMBERS)} as numbers")
         try:
             return cls(**values)
         except (TypeError, ValueError, InputError) as exc:
@@ -530,9 +544,12 @@ class CalibrationResult:
         values["regions"] = _read_regions(values.get("regions", {}), source, regions_folder,
                                           scan_points if _is(scan_points, (int,)) else None)
         try:
-            return cls(**values)
+            result = cls(**values)
         except (TypeError, ValueError) as exc:
             raise InputError(f"{source}: {exc}") from None
+        if result.choice is not None:
+            _check_choice(result, version, source)
+        return result
 
     def to_json_text(self, indices_file: str | None = None) -> str:
         """The text ``to_json`` writes (``result_fingerprint`` hashes it): the regions as counts and the
@@ -570,6 +587,43 @@ class CalibrationResult:
         except (ValueError, RecursionError) as exc:  # JSONDecodeError, bad UTF-8, absurd nesting
             raise InputError(f"{source}: not valid JSON ({exc})") from None
         return cls.from_dict(data, source, regions_folder)
+
+
+# How far a chosen result's matrices may be from what they must be (mm, and a rotation's elements): JSON
+# keeps numbers exactly, so this leaves only the rounding of V^-1 U; any edit is far beyond it.
+SAME_POSE_TOLERANCE = 1e-6
+
+
+def _check_choice(result: CalibrationResult, version: int, source: str) -> None:
+    """A result with a person's choice, as ``choice.choose`` writes it: version 4 or later, who and when
+    said, the chosen match ambiguous only by a tie (TIE_CODES) and the other ok, the chosen pose its U
+    (or V) and W = V^-1 U; else an InputError naming ``source``."""
+    record = result.choice
+    other_role = "reference" if record.role == "workpiece" else "workpiece"
+    match, other = getattr(result, record.role), getattr(result, other_role)
+    pose = result.U if record.role == "workpiece" else result.V
+
+    def same(a, b) -> bool:
+        return a is not None and b is not None and bool(np.allclose(a, b, rtol=0.0, atol=SAME_POSE_TOLERANCE))
+
+    if version < 4:
+        said = f"the file is version {version} (a person's choice is recorded from version 4)"
+    elif not (record.who.strip() and record.when.strip()):
+        said = "its choice does not say who made it and when"
+    elif match is None or match.status != AMBIGUOUS:
+        said = f"the {record.role} match it chose a pose of is {getattr(match, 'status', 'missing')!r}, not ambiguous"
+    elif other is None or other.status != OK:
+        said = f"the {other_role} match is {getattr(other, 'status', 'missing')!r}, not ok"
+    elif not match.reasons or any(r.code not in TIE_CODES for r in match.reasons):
+        said = f"the {record.role} match is in doubt for more than a tie between poses"
+    elif not same(record.matrix, pose):
+        said = f"the chosen pose is not its {'U' if record.role == 'workpiece' else 'V'}"
+    elif not (result.U is not None and result.V is not None and same(result.W, frames.invert(result.V) @ result.U)):
+        said = "its W is not V^-1 U"
+    else:
+        return
+    raise InputError(f"{source}: status {CHOSEN!r} while {said}: the file contradicts itself (edited, or not "
+                     "written by WorkCal); calibrate again")
 
 
 def choice_words(choice: Choice) -> str:

@@ -423,14 +423,24 @@ def choose_pose(obj, index: int, who: str | None = None) -> CalibrationResult:
     """Record that ``who`` (default: the OS user) chose pose ``index`` (0: the best) of an ambiguous
     calibration's match in doubt, as its poses are listed (``placed_model.candidate_poses``): W from that
     pose, the status "ok (chosen)", the models on the scan shown at it; one undo step.  Returns the
-    result.  InputError (the object unchanged) when the calibration is not ambiguous or has no such pose."""
+    result.  InputError (the object unchanged) when its inputs changed since its result (recompute first),
+    when it is not ambiguous only by a tie between poses (``core.choice.why_not``) or has no such pose."""
     if not is_calibration(obj):
         raise InputError(f"{label(obj)}: not a WorkCal calibration")
+    if obj.InputsKey != inputs_of(obj).key():
+        raise InputError(f"{obj.Label}: its inputs changed since it was calibrated: recompute first, then choose "
+                         "among the poses of that result")
     result = result_of(obj)
-    role = choice.chosen_role(result)
-    if role is None or result.choice is not None:
-        raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ambiguous calibration's poses can be "
+    if result.choice is not None:
+        raise InputError(f"{obj.Label}: a pose was chosen already; only an ambiguous calibration's poses can be "
                          "chosen (calibrate again to choose anew)")
+    role = choice.chosen_role(result)
+    if role is None and result.status == AMBIGUOUS:
+        raise InputError(f"{obj.Label}: ambiguous, with no tie between poses to choose from: "
+                         f"{choice.no_choice_words(result)}")
+    if role is None:
+        raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ambiguous calibration's poses can be "
+                         "chosen")
     source = obj.Workpiece if role == "workpiece" else obj.Reference
     axes = choice.part_axes(model_cloud(source, role=role).points)
     chosen = choice.choose(result, role, int(index), axes, who or choice.user_name())

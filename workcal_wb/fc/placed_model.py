@@ -56,8 +56,9 @@ PROPERTIES = [
 def candidates(calibration, role: str) -> list:
     """The poses of ``role``'s model the calibration's match could not tell apart, best first, as
     (4x4 model -> scan transform, the model symmetry that gives it or None): the pose the calibration
-    found (first also after a person chose another), the rival poses the match found, and the poses the
-    model's symmetries give (``core.choice.poses``)."""
+    found (first also after a person chose another), the rival poses the match found that nothing ruled
+    out, and the poses the model's symmetries give when the match says it is symmetric
+    (``core.choice.poses``)."""
     return [(p.matrix, p.symmetry) for p in choice.poses(result_of(calibration), role)]
 
 

@@ -1,9 +1,11 @@
 """The poses an ambiguous calibration left, drawn in the 3D view so that a person sees what changes
-between them: for each pose the workpiece frame's axes (X, Y, Z at their tips) and the toolpath as it
-would run there, each pose in its own colour, the pose shown drawn thicker and labelled.
+between them: for each pose the workpiece frame's axes (X, Y, Z at their tips) and the toolpath where
+the robot would run it were that pose chosen, each pose in its own colour, the pose shown drawn
+thicker and labelled.
 
-One ``SoSeparator`` named OVERLAY_NAME in the view's scene graph, in document coordinates (the poses
-are model -> scan transforms, as the models placed on the scan use them), drawn over the scan (no
+One ``SoSeparator`` named OVERLAY_NAME in the view's scene graph, in document coordinates (each pose
+is the workpiece frame X placed in the scan, ``core.choice.workpiece_placements``: for a reference
+pose not the reference's own transform but where the workpiece would be), drawn over the scan (no
 depth test) so that a toolpath inside the scan's points still shows.  ``drawn(view)`` reads it back.
 """
 from __future__ import annotations
@@ -35,8 +37,8 @@ def hex_colour(index: int) -> str:
 
 @dataclass
 class Poses:
-    """What to draw: the poses (model -> scan 4x4s, best first), which is shown, the length of the
-    frame's axes (mm) and the toolpath's points in the model frame X (None: no toolpath)."""
+    """What to draw: the workpiece frame X placed in the scan for each pose (4x4s, best first), which
+    is shown, the length of the frame's axes (mm) and the toolpath's points in X (None: no toolpath)."""
 
     matrices: list
     shown: int

@@ -273,8 +273,8 @@ def check_calibration(calibration: CalibrationResult, force: bool, source: str =
     if calibration.W is None:
         raise InputError(f"{source}: calibration has no transform W (status {calibration.status!r}); nothing to export")
     failed = [g for g in calibration.quality_gates if g.get("passed") is False]
-    if calibration.status == CHOSEN:  # a person chose among the poses: only the match status gates stay failed
-        failed = [g for g in failed if g.get("unit")]
+    if calibration.status == CHOSEN:  # a person chose among the poses: only that match's status gate stays failed
+        failed = [g for g in failed if g.get("code") != f"{calibration.choice.role}_status"]
     if calibration.ok and failed:
         raise InputError(f"{source}: status {calibration.status!r} while its {gate_text(failed[0])} failed: the file "
                          "contradicts itself (edited, or not written by WorkCal); calibrate again")

@@ -255,20 +255,19 @@ class ResultStep(Step):
         self.uncertainty.setVisible(bool(text))
 
     # ------------------------------------------------------------------ candidate poses
-    def rival_role(self, calibration):
+    def rival_role(self):
         """The match with other poses that fit, when the result is ambiguous or one of them was chosen:
         "workpiece", "reference" or None."""
-        _, result = self.result()
-        return None if result is None else choice.chosen_role(result)
+        return _rival_role(self.result()[1])
 
     def _fill_poses(self, calibration, result) -> None:
         from workcal_wb.fc.placed_model import tie_breaker
 
-        role = None if result is None else choice.chosen_role(result)
-        self.poses.setVisible(role is not None)
-        if role is None:
+        role = _rival_role(result)
+        shown = None if role is None else self.shown_poses(calibration, result, role)
+        self.poses.setVisible(bool(shown))
+        if not shown:
             return
-        shown = self.shown_poses(calibration, result, role)
         count = len(shown)
         self.candidate = min(self.candidate, count - 1)
         words = translate("WorkCal", "workpiece") if role == "workpiece" else translate("WorkCal", "reference object")
@@ -291,13 +290,17 @@ class ResultStep(Step):
 
     def shown_poses(self, calibration, result, role) -> list:
         """What the panel says of each pose of ``role``: core.choice.evidence, its difference from the best
-        named along the model's axes (kept per calibration result: the model's axes cost a read)."""
+        named along the model's axes (kept per calibration result: the model's axes cost a read); none
+        when the model cannot be read."""
         key = (calibration.Name, role, calibration.ResultJson)
         if getattr(self, "_shown_key", None) != key:
             from workcal_wb.fc.models import model_cloud
 
             source = calibration.Workpiece if role == "workpiece" else calibration.Reference
-            axes = choice.part_axes(model_cloud(source, role=role).points)
+            try:  # the model object may be gone (deleted) when a timer refreshes the panel
+                axes = choice.part_axes(model_cloud(source, role=role).points)
+            except WorkCalError:
+                return []
             found = choice.poses(result, role)
             self._shown = [choice.evidence(p, i, choice.difference(found[0].matrix, p.matrix, axes))
                            for i, p in enumerate(found)]
@@ -307,7 +310,7 @@ class ResultStep(Step):
     def show_pose(self, step: int) -> None:
         """Show the models on the scan at the next or previous pose the match found."""
         calibration = self.guide.calibration()
-        if calibration is None or self.rival_role(calibration) is None:
+        if calibration is None or self.rival_role() is None:
             return
         self.candidate = max(self.candidate + step, 0)
         replay.run("workcal_wb.fc.placed_model.show_candidate", calibration, self.candidate, result="placed_models")
@@ -317,7 +320,7 @@ class ResultStep(Step):
     def choose(self) -> None:
         """Choose the pose shown: W from it, "ok (chosen)", recorded (one undo step)."""
         calibration = self.guide.calibration()
-        if calibration is None or self.rival_role(calibration) is None:
+        if calibration is None or self.rival_role() is None:
             return
         index = self.candidate
         self.run_guarded(translate("WorkCal", "Choose the pose"), lambda: replay.run(
@@ -331,11 +334,11 @@ class ResultStep(Step):
         from workcal_wb.fc.setup import toolpath_of
 
         _, result = self.result()
-        role = None if result is None else choice.chosen_role(result)
+        role = _rival_role(result)
         if role is None:
             return None
         source = toolpath_source(calibration) or toolpath_of(calibration.Document)
-        return candidate_display.Poses([p.matrix for p in choice.poses(result, role)], self.candidate,
+        return candidate_display.Poses(choice.workpiece_placements(result, role), self.candidate,
                                        calibration.FrameSize.Value, self.toolpath_points(source))
 
     def toolpath_points(self, source):
@@ -402,9 +405,14 @@ class ResultStep(Step):
             ("reference", translate("WorkCal", "Reference model, placed")))]
         placed = [(obj, text) for obj, text in placed if obj is not None]
         poses = self.drawn_poses(calibration)
-        in_doubt = None if poses is None else find(calibration, self.rival_role(calibration), ON_SCAN)
+        in_doubt = None if poses is None else find(calibration, self.rival_role(), ON_SCAN)
         return Scene(show=[scan] + [obj for obj, _ in placed], fit=[in_doubt or scan],  # the poses in doubt up close
                      labels=[(t, o) for o, t in placed], orientation=FROM_SCANNER, poses=poses)
+
+
+def _rival_role(result) -> str | None:
+    """The match of ``result`` whose poses a person may choose among (or chose among), or None."""
+    return None if result is None else choice.chosen_role(result)
 
 
 def _pose_words(shown: dict) -> str:
