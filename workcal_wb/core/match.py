@@ -763,6 +763,7 @@ class Judge:
         self.noise = float("nan")  # what residuals scatter by: the noise of the scan (on the part) and the model
         self.gate = float("nan")
         self.viewpoint, self.source, self.view = None, "none", None
+        self.faces_viewpoint = None  # where continued_faces looks from, when not the viewpoint (_choose_view)
         self._distance_cache = {}  # (pose, gate) -> _distances
         self._level(fine=False)
 
@@ -1055,7 +1056,8 @@ class Judge:
         point, sample, normals = point[held], sample[held], normals[held]
         samples = np.unique(sample)
         towards = visibility.facing(frames.apply(frames.invert(T), surface.points[samples]),
-                                    surface.normals[samples] @ T[:3, :3], self.viewpoint)
+                                    surface.normals[samples] @ T[:3, :3],
+                                    self.viewpoint if self.faces_viewpoint is None else self.faces_viewpoint)
         usable = surface.flat(samples, OUTLINE.flat_spacings * surface.spacing) & (towards > OUTLINE.facing_cos)
         usable = usable[np.searchsorted(samples, sample)]
         point, sample, normals = point[usable], sample[usable], normals[usable]
@@ -1101,11 +1103,15 @@ class Judge:
                        & (normals @ self.support.normal < -SUPPORT.resting_cos))
             matched &= ~resting
         # A point within the gate of a crease may find its nearest sample on the face that turns away
-        # from the sensor; a few per cent of such normals pull the cone of those seen past the view.
+        # from the sensor; a few per cent of such normals pull the cone of those seen past the view.  The
+        # faces test (continued_faces) looks from the direction of the samples inside faces; the view's
+        # pixels keep the one of all matched samples, which their limits were set with.
+        inside_faces = matched.copy()
         inside = np.flatnonzero(matched)
         on_face = self.surface.flat(idx[inside], max(self.gate, VIEW.face_spacings * self.surface.spacing))
         if on_face.sum() >= VIEW.min_on_faces * len(inside):
-            matched[inside[~on_face]] = False
+            inside_faces[inside[~on_face]] = False
+        face_normals = normals[inside_faces]
         points, normals = self.sample[matched], normals[matched]
         if len(points) < MIN_SCAN_POINTS:
             return
@@ -1114,6 +1120,7 @@ class Judge:
             away = np.mean(visibility.facing(points, normals, given) < visibility.FACING_COS)
             if away <= VIEW.max_facing_away:
                 self._set_view(np.asarray(given, float), points.mean(axis=0), "given")
+                self.faces_viewpoint = None
                 return
             self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
                                  f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
@@ -1124,6 +1131,8 @@ class Judge:
         if away <= VIEW.max_facing_away:
             self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
                                                            f"of its normals, {VIEW.distance_extents:g} scan extents away")
+            self.faces_viewpoint = (points.mean(axis=0) + VIEW.distance_extents * extent
+                                    * visibility.viewing_direction(face_normals)) if len(face_normals) else viewpoint
 
     def least_contradicted(self, T: np.ndarray) -> float:
         """The smallest share of pose T's view contradicted, looking from the viewpoint and from
