@@ -1102,16 +1102,7 @@ class Judge:
             resting = (self.support.on_plane[:len(self.sample)]
                        & (normals @ self.support.normal < -SUPPORT.resting_cos))
             matched &= ~resting
-        # A point within the gate of a crease may find its nearest sample on the face that turns away
-        # from the sensor; a few per cent of such normals pull the cone of those seen past the view.  The
-        # faces test (continued_faces) looks from the direction of the samples inside faces; the view's
-        # pixels keep the one of all matched samples, which their limits were set with.
-        inside_faces = matched.copy()
-        inside = np.flatnonzero(matched)
-        on_face = self.surface.flat(idx[inside], max(self.gate, VIEW.face_spacings * self.surface.spacing))
-        if on_face.sum() >= VIEW.min_on_faces * len(inside):
-            inside_faces[inside[~on_face]] = False
-        face_normals = normals[inside_faces]
+        matched_normals = normals
         points, normals = self.sample[matched], normals[matched]
         if len(points) < MIN_SCAN_POINTS:
             return
@@ -1125,14 +1116,31 @@ class Judge:
             self.warnings.append(f"the given viewpoint ({', '.join(f'{v:g}' for v in given)}) mm sees "
                                  f"{away:.0%} of the matched surface from behind: not the scan's viewpoint; "
                                  "estimated from the scan instead")
-        extent = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-        viewpoint = points.mean(axis=0) + VIEW.distance_extents * extent * visibility.viewing_direction(normals)
+        centre = points.mean(axis=0)
+        reach = VIEW.distance_extents * np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        viewpoint = centre + reach * visibility.viewing_direction(normals)
         away = np.mean(visibility.facing(points, normals, viewpoint) < visibility.FACING_COS)
         if away <= VIEW.max_facing_away:
-            self._set_view(viewpoint, points.mean(axis=0), "estimated from the matched surface: along the middle "
-                                                           f"of its normals, {VIEW.distance_extents:g} scan extents away")
-            self.faces_viewpoint = (points.mean(axis=0) + VIEW.distance_extents * extent
-                                    * visibility.viewing_direction(face_normals)) if len(face_normals) else viewpoint
+            self._set_view(viewpoint, centre, "estimated from the matched surface: along the middle "
+                                              f"of its normals, {VIEW.distance_extents:g} scan extents away")
+            faces = self._inside_faces(idx, matched)
+            self.faces_viewpoint = (centre + reach * visibility.viewing_direction(matched_normals[faces])
+                                    if faces.any() else viewpoint)
+
+    def _inside_faces(self, idx: np.ndarray, matched: np.ndarray) -> np.ndarray:
+        """``matched`` less the points whose nearest samples lie near a crease (within the gate or
+        VIEW.face_spacings model spacings), unless fewer than VIEW.min_on_faces of them would be left (a
+        curved model).  A point within the gate of a crease may find its nearest sample on the face that
+        turns away from the sensor; a few per cent of such normals pull the cone of those seen past the
+        view.  The faces test (continued_faces) looks from the direction of these; the view's pixels keep
+        the one of all matched samples, which their limits were set with."""
+        inside = np.flatnonzero(matched)
+        on_face = self.surface.flat(idx[inside], max(self.gate, VIEW.face_spacings * self.surface.spacing))
+        if on_face.sum() < VIEW.min_on_faces * len(inside):
+            return matched
+        kept = matched.copy()
+        kept[inside[~on_face]] = False
+        return kept
 
     def least_contradicted(self, T: np.ndarray) -> float:
         """The smallest share of pose T's view contradicted, looking from the viewpoint and from
