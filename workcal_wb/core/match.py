@@ -208,6 +208,10 @@ class RivalSettings:
     quick_turn_points: int = 300
     turn_floor: float = 0.85
     turn_sigmas: float = 3.0
+    # A rival of the search turned more than this (deg) from the best is refined to convergence like the
+    # best's turns when it comes near it by the view (Judge._with_turns); one turned less is the best
+    # laid through its wall, or slid, and stays as found.
+    turn_family_deg: float = 2.0
 
 
 RIVALS = RivalSettings()
@@ -899,20 +903,41 @@ class Judge:
         kept = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
         finished = [done for t, done in zip(turns, finished) if any(t is k for k in kept)]
         turns = kept
+        # A rival of the search turned from the best and near it by the view stopped where its refinement did:
+        # refined to convergence like the best, it may land on a turn or on the best, and it is weighed as a
+        # turn is.  Where that leaves it significantly worse by the view, the view is explained as well as found
+        # and that is the evidence: it stays as found, as does one turned no more than RIVALS.turn_family_deg
+        # (the best laid through its wall).
+        poses, weighed = list(poses), list(weighed)
+        refined = []
+        for i in range(1, len(poses)):
+            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.turn_family_deg
+                    or visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
+                    >= VIEW.close_call * sig):
+                continue
+            done = finish(poses[i])
+            evidence = self.evidence(done.T)
+            if visibility.compare(weighed[i].cells, evidence.cells, VERDICT.cell_variance_floor) < sig:
+                poses[i], weighed[i] = done, evidence
+                refined.append(i)
         # A rival refined onto the best since it was found (widened, laid through the wall and back) is no
         # rival; one on the other face of a wall thinner than two gates lies as near, and still is.
-        rest = [i for i in range(1, len(poses)) if not any(near(poses[i], t) and not self._faces_apart(t.T, poses[i].T)
-                                                        for t in [poses[0]] + turns)]
+        # Two rivals refined onto one pose are one.
+        rest = []
+        for i in range(1, len(poses)):
+            repeated = [poses[0]] + turns + [poses[j] for j in rest if i in refined and j in refined]
+            if not any(near(poses[i], t) and not self._faces_apart(t.T, poses[i].T) for t in repeated):
+                rest.append(i)
         poses = [poses[0]] + turns + [poses[i] for i in rest]
         weighed = [weighed[0]] + [self.evidence(t.T) for t in turns] + [weighed[i] for i in rest]
-        turned = [False] + finished + [False] * len(rest)
-        if not any(finished):
+        turned = [False] + finished + [i in refined for i in rest]
+        if not any(turned):
             return poses, weighed, turned
         if not self.fine and any(visibility.compare(weighed[0].cells, e.cells, VERDICT.cell_variance_floor)
-                                 < VIEW.close_call * sig for e in weighed[1:len(turns) + 1]):
+                                 < VIEW.close_call * sig for e, t in zip(weighed[1:], turned[1:]) if t):
             self._level(fine=True)  # a close call: weigh again, finely
             weighed = [self.evidence(p.T) for p in poses]
-        for i in sorted((i for i in range(1, len(turns) + 1) if turned[i]), key=lambda i: -weighed[i].score):
+        for i in sorted((i for i in range(1, len(poses)) if turned[i]), key=lambda i: -weighed[i].score):
             z = visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
             if z < -sig or (z < sig and self._fits(poses[0]) and self._fits(poses[i])
                             and self._far_off(self._distances(poses[0].T), poses[i].T) <= -sig):
