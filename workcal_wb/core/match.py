@@ -879,14 +879,15 @@ class Judge:
         return bool(state.sigma <= FAR_OFF.fit * self.noise)
 
     def _with_turns(self, poses: list, weighed: list, turns: list, finish):
-        """(poses, their evidence, whether each is a turn of the best refined like it): the best's
-        near-symmetric turns (not a symmetry of the model away from it) join the poses, each replacing
-        the rivals it repeats (refined less); a rival that repeats the best is dropped.  Each turn that
-        comes within VIEW.close_call times the rival significance of the best by the view is first refined to
-        convergence like it (``finish``); one further behind is listed as it is, a rival of no one.  A
-        turn better than the best by the view evidence, or as good by it and leaving significantly fewer
-        scan points far off the part (far_off_test) while both fit within FAR_OFF.fit noises, becomes
-        the best; the best it replaces is then one of its turns."""
+        """(poses, their evidence, whether each is refined like the best): the best's near-symmetric turns
+        (not a symmetry of the model away from it) join the poses, each replacing the rivals it repeats
+        (refined less); a rival that repeats the best is dropped.  Each turn that comes within
+        VIEW.close_call times the rival significance of the best by the view is first refined to
+        convergence like it (``finish``); one further behind is listed as it is, a rival of no one.  The
+        rivals of the search near the best by the view are refined so too (_refine_rivals).  A pose so
+        refined that is better than the best by the view evidence, or as good by it and leaving
+        significantly fewer scan points far off the part (far_off_test) while both fit within FAR_OFF.fit
+        noises, becomes the best; the best it replaces is then one of its turns."""
         centre, sig = self.sample.mean(axis=0), self.options.rival_significance
 
         def near(a, b) -> bool:
@@ -903,23 +904,8 @@ class Judge:
         kept = self._distinct_under_symmetry(poses[0], [t for t in turns if not near(t, poses[0])])
         finished = [done for t, done in zip(turns, finished) if any(t is k for k in kept)]
         turns = kept
-        # A rival of the search turned from the best and near it by the view stopped where its refinement did:
-        # refined to convergence like the best, it may land on a turn or on the best, and it is weighed as a
-        # turn is.  Where that leaves it significantly worse by the view, the view is explained as well as found
-        # and that is the evidence: it stays as found, as does one turned no more than RIVALS.turn_family_deg
-        # (the best laid through its wall).
         poses, weighed = list(poses), list(weighed)
-        refined = []
-        for i in range(1, len(poses)):
-            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.turn_family_deg
-                    or visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
-                    >= VIEW.close_call * sig):
-                continue
-            done = finish(poses[i])
-            evidence = self.evidence(done.T)
-            if visibility.compare(weighed[i].cells, evidence.cells, VERDICT.cell_variance_floor) < sig:
-                poses[i], weighed[i] = done, evidence
-                refined.append(i)
+        refined = self._refine_rivals(poses, weighed, finish)
         # A rival refined onto the best since it was found (widened, laid through the wall and back) is no
         # rival; one on the other face of a wall thinner than two gates lies as near, and still is.
         # Two rivals refined onto one pose are one.
@@ -945,6 +931,25 @@ class Judge:
                 weighed[0], weighed[i] = weighed[i], weighed[0]
                 break
         return poses, weighed, turned
+
+    def _refine_rivals(self, poses: list, weighed: list, finish) -> list:
+        """The indices of the rivals (poses[1:], their evidence ``weighed``) refined to convergence like
+        the best (``finish``), in place: a rival of the search turned from the best and near it by the view
+        stopped where its refinement did, and may land on a turn or on the best.  Where refining leaves it
+        significantly worse by the view, the view it explains as found is the evidence, and it stays as
+        found, as does one turned no more than RIVALS.turn_family_deg (the best laid through its wall)."""
+        sig, refined = self.options.rival_significance, []
+        for i in range(1, len(poses)):
+            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.turn_family_deg
+                    or visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
+                    >= VIEW.close_call * sig):
+                continue
+            done = finish(poses[i])
+            evidence = self.evidence(done.T)
+            if visibility.compare(weighed[i].cells, evidence.cells, VERDICT.cell_variance_floor) < sig:
+                poses[i], weighed[i] = done, evidence
+                refined.append(i)
+        return refined
 
     def _far_off(self, best_distances: np.ndarray, T: np.ndarray) -> float:
         """far_off_test of pose T (scan -> model) against the best, whose distances are given.  The
@@ -1458,9 +1463,9 @@ def _failures(fit: _Fit, judge: Judge, view: dict, options: MatchOptions, T: np.
 def _mark_rivals(ranked: list, best_fits: bool, significance: float, options: MatchOptions) -> None:
     """Mark the Candidates after the best that are rivals: no worse than the best by the view's cells, or
     better by the points they leave far off (by ``significance`` standard errors), or seen from the other
-    side (or scoring ``ambiguity_ratio`` of the best).  The far-off test rules out only a turn of the best
-    refined exactly like it (its flip, tried always; one significantly better by the view's cells, or as
-    good by them and leaving
+    side (or scoring ``ambiguity_ratio`` of the best).  The far-off test rules out only a pose refined
+    exactly like the best (its turns, its flip tried always, and rivals near it by the view; one
+    significantly better by the view's cells, or as good by them and leaving
     significantly fewer points far off, took the best's place, see Judge._with_turns), and only when both
     it and the best fit the scan within FAR_OFF.fit noises (``best_fits``, on the verdict's points and on
     the fine ones): a pose refined less (or one that does not fit) can leave points far off by being
