@@ -1,7 +1,8 @@
 """Rules the source must keep that a run seldom catches.
 
 FreeCAD 0.20 and 1.0 (the versions CI runs) wrap PySide2; 1.1 is built on Qt6/PySide6, where these
-Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.  And a module
+Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.  No panel walks
+up into FreeCAD's widgets (see workcal_wb/gui/README.md).  And a module
 never binds again a name it imports (a tuning constant named like a reason code replaced the code).
 """
 import ast
@@ -18,6 +19,9 @@ QT6_BREAKERS = {
     r"\bint\(\s*QtWidgets\.QDialogButtonBox": "PySide6 flags are not ints: return task_panels.OK_CANCEL",
     r"\.exec_\(": "exec_ is deprecated in PySide6: use task_panels.run_modal(dialog)",
     r"from PySide[26]\b|import PySide[26]\b": "import FreeCAD's PySide wrapper, never PySide2/PySide6 directly",
+    # Wrappers made on the way up from a panel, or for a scroll area's widget, can delete FreeCAD's own
+    # widgets when Python collects them (gui/README.md).
+    r"\.parentWidget\(\)|(?<!self)\.widget\(\)": "reach a scroll area through task_panels.common.scroll_area_around",
 }
 
 

@@ -87,10 +87,8 @@ def clipped_texts(root) -> list:
 
 def horizontal_scroll(widget) -> bool:
     """Whether the task view holding ``widget`` scrolls sideways (its content wider than the panel)."""
-    parent = widget.parentWidget()
-    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
-        parent = parent.parentWidget()
-    return parent is not None and parent.horizontalScrollBar().isVisible()
+    area = common.scroll_area_around(widget)
+    return area is not None and area.horizontalScrollBar().isVisible()
 
 
 def view_share(points) -> float:

@@ -9,12 +9,6 @@ FreeCAD = pytest.importorskip("FreeCAD")
 if not FreeCAD.GuiUp:
     pytest.skip("needs the FreeCAD GUI (run tests/gui/run_gui_tests.py under xvfb-run freecad)",
                 allow_module_level=True)
-# An open defect: on FreeCAD 1.0, once these tests and the import-and-pick ones have run, a later pass of the
-# event loop crashes inside FreeCAD (no Python frame below it); either file alone does not.  Until it is
-# found, these run on FreeCAD 0.x only.
-if FreeCAD.Version()[0] != "0":
-    pytest.skip("on FreeCAD 1.0 a later test crashes inside FreeCAD's event loop after these have run "
-                "(an open defect)", allow_module_level=True)
 
 from workcal_wb.core import frames  # noqa: E402
 from workcal_wb.core.result import CalibrationResult  # noqa: E402

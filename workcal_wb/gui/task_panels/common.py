@@ -218,6 +218,20 @@ def with_force(action, confirm=None):
     return action(force=True)
 
 
+def scroll_area_around(widget):
+    """The innermost QScrollArea holding ``widget`` (FreeCAD's task view, or a panel's own), or None.
+    Found among the window's scroll areas, not by walking up the parents: a Python wrapper made on that
+    walk for one of FreeCAD's own widgets (the task view's panel) can delete it when Python collects the
+    wrapper, and FreeCAD 1.0 then crashes on its next layout pass."""
+    window = main_window()
+    try:
+        areas = [a for a in window.findChildren(QtWidgets.QScrollArea) if a.isAncestorOf(widget)] if window else []
+    except RuntimeError:  # the widget is gone
+        return None
+    inner = [a for a in areas if not any(b is not a and a.isAncestorOf(b) for b in areas)]
+    return inner[0] if inner else None
+
+
 def process_events(seconds: float = 0.0) -> None:
     """Let the event loop run (for waiting in tests and scripts without blocking the window)."""
     import time

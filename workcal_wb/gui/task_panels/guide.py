@@ -20,7 +20,7 @@ from workcal_wb.fc.setup import get_setup
 from workcal_wb.gui import candidate_display
 from workcal_wb.gui import view as gui_view
 from workcal_wb.gui.task_panels import CLOSE, QtCore, QtGui, QtWidgets
-from workcal_wb.gui.task_panels.common import close_dialog, show_panel
+from workcal_wb.gui.task_panels.common import close_dialog, scroll_area_around, show_panel
 from workcal_wb.gui.task_panels.steps import ATTENTION, DONE, FAILED, STEPS, TODO
 from workcal_wb.gui.task_panels.steps.base import reveal
 
@@ -125,16 +125,11 @@ class FitToTaskView(QtCore.QObject):
         QtCore.QTimer.singleShot(0, self.attach)
 
     def attach(self) -> None:
-        try:
-            parent = self.form.parentWidget()
-        except RuntimeError:  # the panel closed before it was shown
+        area = scroll_area_around(self.form)  # None: the panel closed, or is not shown in a task view (yet)
+        if area is None:
             return
-        while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
-            parent = parent.parentWidget()
-        if parent is None:  # not shown in a task view (yet)
-            return
-        self.area = parent
-        parent.viewport().installEventFilter(self)
+        self.area = area
+        area.viewport().installEventFilter(self)
         self.fit()
 
     def eventFilter(self, watched, event):  # noqa: N802  (Qt's name)
@@ -145,7 +140,8 @@ class FitToTaskView(QtCore.QObject):
     def fit(self) -> None:
         try:
             viewport = self.area.viewport()
-            top = self.form.mapTo(self.area.widget(), QtCore.QPoint(0, 0)).y()
+            # The form's top in the scrolled content (which lies that far up the viewport).
+            top = self.form.mapTo(viewport, QtCore.QPoint(0, 0)).y() + self.area.verticalScrollBar().value()
         except (RuntimeError, AttributeError):
             return
         height = max(self.MIN_HEIGHT, viewport.height() - top - self.BOTTOM_MARGIN)

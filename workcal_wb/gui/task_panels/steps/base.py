@@ -7,6 +7,7 @@ import FreeCAD
 
 from workcal_wb.core.result import USABLE
 from workcal_wb.gui.task_panels import QtCore, QtWidgets
+from workcal_wb.gui.task_panels.common import scroll_area_around
 
 translate = FreeCAD.Qt.translate
 
@@ -117,11 +118,9 @@ def off_model_advice(calibration) -> str:
 
 def reveal(widget) -> None:
     """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight."""
-    parent = widget.parentWidget()
-    while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
-        parent = parent.parentWidget()
-    if parent is not None:
-        QtCore.QTimer.singleShot(0, lambda: _ensure_visible(parent, widget))
+    area = scroll_area_around(widget)
+    if area is not None:
+        QtCore.QTimer.singleShot(0, lambda: _ensure_visible(area, widget))
 
 
 def _ensure_visible(area, widget) -> None:
