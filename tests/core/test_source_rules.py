@@ -1,8 +1,8 @@
 """Rules the source must keep that a run seldom catches.
 
 FreeCAD 0.20 and 1.0 (the versions CI runs) wrap PySide2; 1.1 is built on Qt6/PySide6, where these
-Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.  No panel walks
-up into FreeCAD's widgets (see workcal_wb/gui/README.md).  And a module
+Qt5 idioms fail: QAction lives in QtGui, flags are not ints, ``exec_`` is deprecated.  No panel walks up
+into FreeCAD's widgets (workcal_wb/gui/README.md).  And a module
 never binds again a name it imports (a tuning constant named like a reason code replaced the code).
 """
 import ast
@@ -19,10 +19,11 @@ QT6_BREAKERS = {
     r"\bint\(\s*QtWidgets\.QDialogButtonBox": "PySide6 flags are not ints: return task_panels.OK_CANCEL",
     r"\.exec_\(": "exec_ is deprecated in PySide6: use task_panels.run_modal(dialog)",
     r"from PySide[26]\b|import PySide[26]\b": "import FreeCAD's PySide wrapper, never PySide2/PySide6 directly",
-    # Wrappers made on the way up from a panel, or for a scroll area's widget, can delete FreeCAD's own
-    # widgets when Python collects them (gui/README.md).
-    r"\.parentWidget\(\)|(?<!self)\.widget\(\)": "reach a scroll area through task_panels.common.scroll_area_around",
 }
+# Wrappers PySide makes on the way up from a panel, or for a scroll area's widget, can delete FreeCAD's own
+# widgets when Python collects them (workcal_wb/gui/README.md).  The GUI tests run in the same FreeCAD.
+WIDGET_WALKS = r"\.parentWidget\s*\(|(?<!\bself)\.widget\s*\(\)"
+GUI_SOURCES = SOURCES + sorted((ROOT / "tests" / "gui").rglob("*.py"))
 
 
 @pytest.mark.parametrize("pattern", sorted(QT6_BREAKERS))
@@ -30,6 +31,19 @@ def test_no_qt5_only_idioms(pattern):
     found = [f"{path.relative_to(ROOT)}:{n}" for path in SOURCES
              for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if re.search(pattern, line)]
     assert not found, f"{QT6_BREAKERS[pattern]}: {', '.join(found)}"
+
+
+def test_no_walk_up_into_freecads_widgets():
+    found = [f"{path.relative_to(ROOT)}:{n}" for path in GUI_SOURCES
+             for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+             if re.search(WIDGET_WALKS, line)]
+    assert not found, f"reach a scroll area through task_panels.common.scroll_area_around: {', '.join(found)}"
+
+
+def test_the_walk_rule_sees_the_walks_and_a_panels_own_scroll_area_is_left_alone():
+    assert re.search(WIDGET_WALKS, "parent = parent.parentWidget()")
+    assert re.search(WIDGET_WALKS, "self.form.mapTo(self.area.widget(), point)")
+    assert not re.search(WIDGET_WALKS, "content = self.widget()")
 
 
 def rebound_imports(source: str) -> list:

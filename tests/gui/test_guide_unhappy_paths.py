@@ -471,6 +471,7 @@ def test_freecads_task_panel_outlives_the_guides_python_objects(pump):
     Python made for it as the task view's widget went with the guide and deleted it, and FreeCAD 1.0
     crashed on its next layout pass), and a dialog still opens there."""
     import gc
+    import weakref
 
     from workcal_wb.gui.commands.guide import open_guide
 
@@ -484,9 +485,11 @@ def test_freecads_task_panel_outlives_the_guides_python_objects(pump):
         FreeCADGui.Control.closeDialog()
         FreeCAD.closeDocument(other.Name)
         pump(0.2)
+        guide = weakref.ref(panel)
         del panel
         gc.collect()
         pump(0.2)
+        assert guide() is None  # collected, with what it held
         assert task_panels() == before
     other = FreeCAD.newDocument("GuideAfter")
     try:

@@ -15,11 +15,11 @@ when it explains the scan to within the scan's own noise, which must not exceed 
 covers a real part of the model, leaves no large share of the view contradicted, pins every
 motion, and no rival is within the statistical noise of its evidence (given the number of view
 cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
-The verdict's best has its near-symmetric turns tried again, each refined exactly like it
-(Judge._with_turns): one of them is the right pose when the search handed over a flip, and only
-such a turn, as converged as the best and with both fitting within FAR_OFF.fit noises, is no rival
-when it leaves significantly more points far off (or takes the best's place when it leaves
-significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home),
+The verdict's best has its near-symmetric turns tried again, each refined exactly like it, and so are
+the search's turned rivals near it by the view (Judge._with_turns): one of them is the right pose when
+the search handed over a flip, and only such a pose, as converged as the best and with both fitting
+within FAR_OFF.fit noises, is no rival when it leaves significantly more points far off (or takes the
+best's place when it leaves significantly fewer); a pose fitting worse than that is first tried for a slide home (_slid_home),
 unless it misses the scan by more than REFINE.hopeless_fit times the verdict's limit (nor is such a pose
 taken to the exact surface: a wrong model's poses are all such, and are failed in seconds); a
 model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
@@ -209,9 +209,9 @@ class RivalSettings:
     turn_floor: float = 0.85
     turn_sigmas: float = 3.0
     # A rival of the search turned more than this (deg) from the best is refined to convergence like the
-    # best's turns when it comes near it by the view (Judge._with_turns); one turned less is the best
+    # best's turns when it comes near it by the view (Judge._refine_rivals); one turned less is the best
     # laid through its wall, or slid, and stays as found.
-    turn_family_deg: float = 2.0
+    min_rival_turn_deg: float = 2.0
 
 
 RIVALS = RivalSettings()
@@ -228,8 +228,9 @@ class FarOffSettings:
     # sign patterns, their weights on a grid of 1/sign_flip_steps: sign_flip_z); beyond, its normal approximation.
     exact_sign_flips: int = 64
     sign_flip_steps: int = 256
-    # The far-off test rules out a turn of the best only when the best's residual scale is at most this many
-    # times the noise: right poses fit within it, a pose slid along a curved part (held by a few points) does not.
+    # The far-off test rules out a pose refined like the best only when the best's residual scale is at most
+    # this many times the noise: right poses fit within it, a pose slid along a curved part (held by a few
+    # points) does not.
     fit: float = 2.0
 
 
@@ -907,11 +908,18 @@ class Judge:
         poses, weighed = list(poses), list(weighed)
         refined = self._refine_rivals(poses, weighed, finish)
         # A rival refined onto the best since it was found (widened, laid through the wall and back) is no
-        # rival; one on the other face of a wall thinner than two gates lies as near, and still is.
-        # Two rivals refined onto one pose are one.
+        # rival; one on the other face of a wall thinner than two gates lies as near, and still is.  A
+        # rival _refine_rivals refined repeats only a pose refined as far (the best, a finished turn, an
+        # earlier such rival), or a symmetric copy of one.
         rest = []
         for i in range(1, len(poses)):
-            repeated = [poses[0]] + turns + [poses[j] for j in rest if i in refined and j in refined]
+            if i in refined:
+                repeated = ([poses[0]] + [t for t, done in zip(turns, finished) if done]
+                            + [poses[j] for j in rest if j in refined])
+                if len(self._distinct_under_symmetry(poses[i], repeated)) < len(repeated):  # a symmetric copy
+                    continue
+            else:
+                repeated = [poses[0]] + turns
             if not any(near(poses[i], t) and not self._faces_apart(t.T, poses[i].T) for t in repeated):
                 rest.append(i)
         poses = [poses[0]] + turns + [poses[i] for i in rest]
@@ -933,20 +941,22 @@ class Judge:
         return poses, weighed, turned
 
     def _refine_rivals(self, poses: list, weighed: list, finish) -> list:
-        """The indices of the rivals (poses[1:], their evidence ``weighed``) refined to convergence like
-        the best (``finish``), in place: a rival of the search turned from the best and near it by the view
-        stopped where its refinement did, and may land on a turn or on the best.  Where refining leaves it
-        significantly worse by the view, the view it explains as found is the evidence, and it stays as
-        found, as does one turned no more than RIVALS.turn_family_deg (the best laid through its wall)."""
+        """The indices of the rivals (poses[1:], their evidence ``weighed``) refined like the best
+        (``finish``), in place.  A rival of the search turned more than RIVALS.min_rival_turn_deg from the
+        best (less: the best laid through its wall, or slid) and within VIEW.close_call times the rival
+        significance of it by the view stopped where its refinement did.  Refined, it replaces the pose
+        found when it is still a rival by the view, or no further behind the best than found: a view the
+        pose found explains as well as the best stays that evidence."""
         sig, refined = self.options.rival_significance, []
         for i in range(1, len(poses)):
-            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.turn_family_deg
-                    or visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
-                    >= VIEW.close_call * sig):
+            found_behind = visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
+            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.min_rival_turn_deg
+                    or found_behind >= VIEW.close_call * sig):
                 continue
             done = finish(poses[i])
             evidence = self.evidence(done.T)
-            if visibility.compare(weighed[i].cells, evidence.cells, VERDICT.cell_variance_floor) < sig:
+            behind = visibility.compare(weighed[0].cells, evidence.cells, VERDICT.cell_variance_floor)
+            if behind < sig or behind <= found_behind:
                 poses[i], weighed[i] = done, evidence
                 refined.append(i)
         return refined

@@ -220,12 +220,14 @@ def with_force(action, confirm=None):
 
 def scroll_area_around(widget):
     """The innermost QScrollArea holding ``widget`` (FreeCAD's task view, or a panel's own), or None.
-    Found among the window's scroll areas, not by walking up the parents: a Python wrapper made on that
-    walk for one of FreeCAD's own widgets (the task view's panel) can delete it when Python collects the
-    wrapper, and FreeCAD 1.0 then crashes on its next layout pass."""
+    Found among the main window's scroll areas (whose Python wrapper keeps the wrappers it found), not by
+    walking up ``parentWidget()`` nor through a scroll area's ``widget()``: PySide links the wrappers those
+    return to the one asked, and collected with a closed panel they deleted FreeCAD's own task panel
+    (FreeCAD 1.0 then crashed on its next layout pass)."""
     window = main_window()
     try:
-        areas = [a for a in window.findChildren(QtWidgets.QScrollArea) if a.isAncestorOf(widget)] if window else []
+        areas = [a for a in window.findChildren(QtWidgets.QScrollArea)
+                 if a is not widget and a.isAncestorOf(widget)] if window else []
     except RuntimeError:  # the widget is gone
         return None
     inner = [a for a in areas if not any(b is not a and a.isAncestorOf(b) for b in areas)]

@@ -117,15 +117,16 @@ def off_model_advice(calibration) -> str:
 
 
 def reveal(widget) -> None:
-    """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight."""
-    area = scroll_area_around(widget)
-    if area is not None:
-        QtCore.QTimer.singleShot(0, lambda: _ensure_visible(area, widget))
+    """Scroll FreeCAD's task view so that ``widget`` (a message just shown, a page just opened) is in sight,
+    from the event loop: a panel being built is not in the window yet."""
+    QtCore.QTimer.singleShot(0, lambda: _ensure_visible(widget))
 
 
-def _ensure_visible(area, widget) -> None:
+def _ensure_visible(widget) -> None:
+    area = scroll_area_around(widget)  # None: the panel closed meanwhile
     try:
-        area.ensureWidgetVisible(widget)
+        if area is not None:
+            area.ensureWidgetVisible(widget)
     except RuntimeError:  # the panel closed meanwhile
         pass
 
