@@ -148,7 +148,8 @@ class Candidate:
     """A pose a match weighed, as its result lists it (the best first): U (model -> scan) and how it
     compares with the best by the view evidence and by the scan points it leaves far off, whether it
     is refined like the best (``turn_of_best``: a turn of it, or a rival near it by the view), fits the
-    scan within the noise, is a rival, or was ruled out by a physical constraint.  ``evidence`` (visibility.Evidence) is kept while the match judges it."""
+    scan within the noise, is a rival, or was ruled out by a physical constraint.  ``evidence``
+    (visibility.Evidence) is kept while the match judges it."""
 
     matrix: np.ndarray
     score: float = 0.0
