@@ -20,9 +20,9 @@ the search's turned rivals near it by the view (Judge._with_turns): one of them 
 the search handed over a flip, and only such a pose, as converged as the best and with both fitting
 within FAR_OFF.fit noises, is no rival when it leaves significantly more points far off (or takes the
 best's place when it leaves significantly fewer); a pose fitting worse than that is first tried for a
-slide home (_slid_home), unless it misses the scan by more than REFINE.hopeless_fit times the verdict's limit (nor is such a pose
-taken to the exact surface: a wrong model's poses are all such, and are failed in seconds); a
-model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
+slide home (_slid_home), unless it misses the scan by more than REFINE.hopeless_fit times the verdict's
+limit (nor is such a pose taken to the exact surface: a wrong model's poses are all such, and are
+failed in seconds); a model that is symmetric (symmetry.py) makes every match ambiguous and the result names the
 symmetry.  Otherwise the match fails or is ambiguous and says why.
 """
 from __future__ import annotations
