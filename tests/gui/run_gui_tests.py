@@ -19,9 +19,12 @@ def _run():
     sys.stdout, sys.stderr = sys.__stdout__, sys.__stderr__
     # --durations: the slowest GUI tests named in the CI log, as the headless run does (CI must stay well under 30 min).
     # WORKCAL_GUI_PYTEST_ARGS (make test-gui GUI_PYTEST_ARGS="-k name"): a chosen few, while working on them.
+    # Files or tests named there are run alone (with the whole folder too, a file would run twice, its
+    # second run on what the first left behind).
     chosen = shlex.split(os.environ.get("WORKCAL_GUI_PYTEST_ARGS", ""))
+    named = [arg for arg in chosen if not arg.startswith("-") and os.path.exists(arg.split("::")[0])]
     rc = pytest.main(["-q", "-rfEs", "--durations=10", "-p", "no:cacheprovider", "--rootdir", os.path.dirname(TESTS), *chosen,
-                      TESTS])
+                      *([] if named else [TESTS])])
     sys.stdout.flush()
     os._exit(int(rc))  # FreeCAD ignores QApplication.exit codes; leave with pytest's status
 
