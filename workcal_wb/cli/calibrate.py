@@ -161,10 +161,10 @@ def _list_poses(result, files: dict, models: dict, written: Path) -> None:
 
     if result.status != AMBIGUOUS:
         return
-    role = choice.chosen_role(result)
-    if role is None:
-        print(f"workcal calibrate: ambiguous, with no tie between poses to choose from: "
-              f"{choice.no_choice_words(result)}", file=sys.stderr)
+    try:
+        role = choice.role_to_choose(result)
+    except InputError as why:
+        print(f"workcal calibrate: {why}", file=sys.stderr)
         return
     poses = choice.poses(result, role)
     print(f"workcal calibrate: the {role} match left {len(poses)} poses the scan cannot tell apart (choose one "

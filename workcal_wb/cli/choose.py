@@ -13,7 +13,7 @@ from workcal_wb.cli.arguments import UNITS, add_cache_options, count, input_file
 from workcal_wb.core import choice
 from workcal_wb.core.errors import InputError
 from workcal_wb.core.outputs import OutputFolder, check_whole_set
-from workcal_wb.core.result import AMBIGUOUS, CalibrationResult, choice_words
+from workcal_wb.core.result import CalibrationResult
 
 # What a choice writes into --out (the calibration's result.json and its region indices, the choice recorded).
 OUTPUTS = ("result.json", "result.regions.npz")
@@ -52,16 +52,10 @@ def _out_folder(args) -> Path:
 def run(args) -> int:
     check_whole_set(args.result)
     result = CalibrationResult.from_json(args.result)
-    if result.choice is not None:
-        raise InputError(f"{args.result}: its pose was chosen already ({choice_words(result.choice)}); "
-                         "choose anew from the calibration's own result.json")
-    role = choice.chosen_role(result)
-    if role is None:
-        if result.status == AMBIGUOUS:
-            raise InputError(f"{args.result}: ambiguous, with no tie between poses to choose from: "
-                             f"{choice.no_choice_words(result)}")
-        raise InputError(f"{args.result}: its status is {result.status!r}; only an ambiguous calibration's poses "
-                         "can be chosen")
+    try:
+        role = choice.role_to_choose(result)
+    except InputError as why:
+        raise InputError(f"{args.result}: {why}") from None
     cache = model_cache(args)
     model = read_model(args.model, args.model_units, cache, result.seed)
     axes = choice.part_axes(model.points)

@@ -26,7 +26,7 @@ from .refine import coarse_to_fine
 from .regions import (LOCATE, find_platform, joins_within, locate, match_trusted, nearer_own_model, refit,
                       standing_on)
 from .result import (AMBIGUOUS, DISTORTION, FAILED, NOT_FOUND, OK, RMS, SCAN_NOT_SOLID, UNCERTAINTY, WITHIN_TOLERANCE,
-                     CalibrationResult, MatchResult, Reason)
+                     CalibrationResult, MatchResult, Reason, status_gate_code)
 from .surface import SurfaceModel
 from .surroundings import judged_in_surroundings
 
@@ -561,7 +561,7 @@ def _quality_gates(U_match: MatchResult, V_match: MatchResult, uncertainty: dict
     to change when too many are."""
     gates = []
     for role, m in (("workpiece", U_match), ("reference", V_match)):
-        gates.append({"code": f"{role}_status", "name": f"{role} match status", "value": m.status, "limit": OK,
+        gates.append({"code": status_gate_code(role), "name": f"{role} match status", "value": m.status, "limit": OK,
                       "passed": m.status == OK, "unit": ""})
         gates.append({"code": f"{role}_{RMS}", "name": f"{role} RMS", "value": m.rms_mm, "limit": tolerance,
                       "passed": bool(np.isfinite(m.rms_mm) and m.rms_mm <= tolerance), "unit": "mm"})

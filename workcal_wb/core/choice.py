@@ -20,7 +20,8 @@ from scipy.spatial.transform import Rotation
 
 from . import frames
 from .errors import InputError
-from .result import AMBIGUOUS, CHOSEN, OK, SYMMETRIC, TIE_CODES, Candidate, CalibrationResult, Choice, codes
+from .result import (AMBIGUOUS, CHOSEN, OK, SYMMETRIC, TIE_CODES, Candidate, CalibrationResult, Choice, choice_words,
+                     codes, status_gate_code)
 from .symmetry import turn
 
 ROLES = ("workpiece", "reference")
@@ -191,7 +192,7 @@ def why_not(result: CalibrationResult, role: str) -> str | None:
     if other is None or other.status != OK:
         return (f"the {_other(role)} match is {getattr(other, 'status', 'missing')!r}: choosing a {role} pose "
                 f"cannot settle that; calibrate again")
-    failed = [g for g in result.quality_gates if g.get("passed") is False and g.get("code") != f"{role}_status"]
+    failed = [g for g in result.quality_gates if g.get("passed") is False and g.get("code") != status_gate_code(role)]
     if failed:
         return f"the calibration's {failed[0].get('name', 'quality gate')} failed: choosing a pose cannot settle that"
     if len(poses(result, role)) < 2:
@@ -205,6 +206,20 @@ def chosen_role(result: CalibrationResult) -> str | None:
     if result.choice is not None:
         return result.choice.role
     return next((role for role in ROLES if why_not(result, role) is None), None)
+
+
+def role_to_choose(result: CalibrationResult) -> str:
+    """The match whose poses a person may choose among now; InputError saying why there is none (a pose
+    was chosen already, the calibration is ambiguous by more than a tie, or it is not ambiguous)."""
+    if result.choice is not None:
+        raise InputError(f"a pose was chosen already ({choice_words(result.choice)}); only an ambiguous "
+                         "calibration's poses can be chosen: choose anew from the result it was chosen from")
+    role = chosen_role(result)
+    if role is None and result.status == AMBIGUOUS:
+        raise InputError(f"ambiguous, with no tie between poses to choose from: {no_choice_words(result)}")
+    if role is None:
+        raise InputError(f"its status is {result.status!r}; only an ambiguous calibration's poses can be chosen")
+    return role
 
 
 def no_choice_words(result: CalibrationResult) -> str:

@@ -103,6 +103,11 @@ UNKNOWN = "unknown"  # a reason read from a file written before reasons had code
 TIE_CODES = (SYMMETRIC, OTHER_SIDE, RIVAL, TIE_UNBROKEN)
 
 
+def status_gate_code(role: str) -> str:
+    """The code of the quality gate that a match's status is "ok" (role: "workpiece" or "reference")."""
+    return f"{role}_status"
+
+
 @dataclass(frozen=True)
 class Reason:
     """Why a result is not "ok": a stable ``code`` (the module's constants above) that decisions and

@@ -431,16 +431,10 @@ def choose_pose(obj, index: int, who: str | None = None) -> CalibrationResult:
         raise InputError(f"{obj.Label}: its inputs changed since it was calibrated: recompute first, then choose "
                          "among the poses of that result")
     result = result_of(obj)
-    if result.choice is not None:
-        raise InputError(f"{obj.Label}: a pose was chosen already; only an ambiguous calibration's poses can be "
-                         "chosen (calibrate again to choose anew)")
-    role = choice.chosen_role(result)
-    if role is None and result.status == AMBIGUOUS:
-        raise InputError(f"{obj.Label}: ambiguous, with no tie between poses to choose from: "
-                         f"{choice.no_choice_words(result)}")
-    if role is None:
-        raise InputError(f"{obj.Label}: its status is {obj.Status!r}; only an ambiguous calibration's poses can be "
-                         "chosen")
+    try:
+        role = choice.role_to_choose(result)
+    except InputError as why:
+        raise InputError(f"{obj.Label}: {why}") from None
     source = obj.Workpiece if role == "workpiece" else obj.Reference
     axes = choice.part_axes(model_cloud(source, role=role).points)
     chosen = choice.choose(result, role, int(index), axes, who or choice.user_name())

@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from .. import frames
 from ..errors import InputError, WorkCalError
 from ..pointops import sample_triangles
-from ..result import CHOSEN, CalibrationResult
+from ..result import CHOSEN, CalibrationResult, status_gate_code
 from ..surface import SurfaceModel
 from . import orientation
 from .model import CODE, RAPID, RotaryTable, Toolpath
@@ -274,7 +274,7 @@ def check_calibration(calibration: CalibrationResult, force: bool, source: str =
         raise InputError(f"{source}: calibration has no transform W (status {calibration.status!r}); nothing to export")
     failed = [g for g in calibration.quality_gates if g.get("passed") is False]
     if calibration.status == CHOSEN:  # a person chose among the poses: only that match's status gate stays failed
-        failed = [g for g in failed if g.get("code") != f"{calibration.choice.role}_status"]
+        failed = [g for g in failed if g.get("code") != status_gate_code(calibration.choice.role)]
     if calibration.ok and failed:
         raise InputError(f"{source}: status {calibration.status!r} while its {gate_text(failed[0])} failed: the file "
                          "contradicts itself (edited, or not written by WorkCal); calibrate again")

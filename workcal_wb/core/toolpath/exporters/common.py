@@ -14,7 +14,7 @@ import numpy as np
 from workcal_wb import __version__
 
 from ...errors import InputError
-from ...result import CHOSEN, CalibrationResult, choice_words, result_fingerprint
+from ...result import CHOSEN, CalibrationResult, choice_words, result_fingerprint, status_gate_code
 from ..model import (COOLANT, DWELL, LENGTH_OFFSET, MACHINE_MOVE, SPINDLE, STOP, TOOL_CHANGE, Event, Toolpath)
 from ..orientation import tool_rotations
 from ..safety import ExportOptions, check_positions, forced_banner, gate_text, number, value_text
@@ -79,7 +79,7 @@ def _calibration_lines(job: ExportJob) -> list[str]:
     c = job.calibration
     lines = [f"calibration: {job.options.calibration_source}, result sha256 {result_fingerprint(c)}",
              f"calibration status {c.status}, tolerance {value_text(c.tolerance_mm)} mm, {_uncertainty_line(c)}"]
-    resolved = f"{c.choice.role}_status" if c.status == CHOSEN else None  # the gate a person's choice settles
+    resolved = status_gate_code(c.choice.role) if c.status == CHOSEN else None  # the gate a person's choice settles
     lines += [f"{gate_text(g)}: {'passed' if g.get('passed') else 'FAILED'}"
               + (" (resolved by the person's choice below)" if not g.get("passed") and g.get("code") == resolved
                  else "") for g in c.quality_gates]
