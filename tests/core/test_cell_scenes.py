@@ -149,6 +149,61 @@ def test_rivals_past_max_ruled_out_leave_the_tie_standing_though_all_sink(monkey
 
 
 @pytest.mark.slow
+def test_a_search_ahead_the_reference_made_needless_is_stopped(monkeypatch):
+    """Seen low, the workpiece's likeliest cluster was the L-block: the car was searched in it on
+    the second thread (two whole searches, 6 s) after the reference had taken it, and the calibration
+    waited for that.  Once both objects are found, the search ahead stops at its next phase; the
+    calibration is the one found without it."""
+    from workcal_wb.core import regions
+    from workcal_wb.core.errors import Cancelled
+
+    ended, original = [], regions.match  # (role, how the match ended) of each match while locating
+
+    def recorded(cloud, surface, *args, **kwargs):
+        try:
+            result = original(cloud, surface, *args, **kwargs)
+        except Cancelled:
+            ended.append((cloud.name.split()[0], "stopped"))
+            raise
+        ended.append((cloud.name.split()[0], result.status))
+        return result
+
+    monkeypatch.setattr(regions, "match", recorded)
+    cell = cell_scan(CellSpec(azimuth_deg=233.0, elevation_deg=22.0, frame="arbitrary", seed=3))
+    result = _calibrated(cell)
+    assert ("workpiece", "stopped") in ended, ended
+    assert result.status == "ok", result.reasons
+    rotation, displacement = _errors(result.W, cell.W, cell.workpiece_model)
+    assert rotation < 0.05 and displacement < 0.1
+
+
+@pytest.mark.slow
+def test_a_cluster_that_holds_no_pose_of_the_reference_is_searched_once(monkeypatch):
+    """With clay joining the objects, a small cluster beside them (594 points) was the reference's
+    likeliest: three whole searches with three seeds, each a misfit, 4 s of 6.  A match that
+    finds no pose fitting within the noise has searched again itself with more hypotheses; the
+    cluster is searched once, and the calibration is the same."""
+    from workcal_wb.core import regions
+
+    searched, original = [], regions.match  # (role, points) of each search while locating
+
+    def recorded(cloud, surface, *args, **kwargs):
+        result = original(cloud, surface, *args, **kwargs)
+        searched.append((cloud.name.split()[0], len(cloud.points), tuple(codes(result.reasons))))
+        return result
+
+    monkeypatch.setattr(regions, "match", recorded)
+    cell = cell_scan(CellSpec(layout="bridge", frame="arbitrary", seed=4))
+    result = _calibrated(cell)
+    misfits = [s for s in searched if "misfit" in s[2]]
+    assert misfits, searched
+    assert all(searched.count(s) == 1 for s in misfits), searched
+    assert result.status == "ok", result.reasons
+    rotation, displacement = _errors(result.W, cell.W, cell.workpiece_model)
+    assert rotation < 0.05 and displacement < 0.1
+
+
+@pytest.mark.slow
 def test_an_l_block_seen_low_from_its_outer_side_is_found_and_never_ok_turned_over():
     """Seen low from its outer side, the L-block calibrated "ok" with V 180 deg off
     (seeds 1 and 2 on Debian 12, seed 0 on Debian 13 on an AMD EPYC machine): the right pose's RANSAC

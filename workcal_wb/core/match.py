@@ -37,7 +37,7 @@ import numpy as np
 from . import frames, global_search, pointops, visibility
 from .global_search import COARSE_VOXELS_PER_DIAGONAL
 from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
-from .errors import InputError
+from .errors import Cancelled, InputError
 from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
 from .refine import coarse_to_fine, refine, refine_exact
 from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
@@ -139,9 +139,9 @@ class RefineSettings:
     # A pose missing the verdict's limit (VERDICT.max_noise_ratio noises plus the tolerance) by more than this
     # factor is no slide from fitting: it is neither slid home nor taken to the exact surface (costly on a mesh).
     hopeless_fit: float = 2.0
-    # prepare fills the cell grids of the first prepared_levels levels: gates up to 2 x GATE_CELLS sample
-    # spacings, 3 coarse voxels at the default voxel.
-    prepared_levels: int = 2
+    # prepare fills the cell grids of the first prepared_levels levels: gates up to 4 x GATE_CELLS sample
+    # spacings, 6 coarse voxels at the default voxel (a depth camera's tolerance asks for such gates).
+    prepared_levels: int = 3
 
 
 REFINE = RefineSettings()
@@ -323,16 +323,18 @@ SUPPORT = SupportSettings()
 
 
 def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOptions = MatchOptions(),
-          **overrides) -> MatchResult:
+          stop=None, **overrides) -> MatchResult:
     """Match ``model`` (a Cloud or a prepared SurfaceModel, frame X) into ``scan`` (frame S).
 
     ``init``, when given, is a guess of U and replaces the global search.  Keyword overrides set
     MatchOptions fields.  Bad input raises InputError; a match that cannot be trusted comes back
-    with status "failed" or "ambiguous" and the reasons.
+    with status "failed" or "ambiguous" and the reasons.  ``stop`` (a threading.Event), once set,
+    ends the match with Cancelled at the start of its next phase, or of the verdict's next pose (a
+    search nobody waits for any more).
     """
     options = _checked_options(replace(options, **overrides))
     with pointops.blas_threads(options.blas_threads):
-        result = _match(scan, model, init, options)
+        result = _match(scan, model, init, options, stop=stop)
     pointops.hand_back_freed_heap()  # scan after scan: each match's temporaries are not carried into the next
     return result
 
@@ -348,8 +350,8 @@ def match_pose(scan: Cloud, model, init: np.ndarray, options: MatchOptions = Mat
     return found.matrix if isinstance(found, MatchResult) else found
 
 
-def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = False):
-    timer = PhaseTimer()
+def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = False, stop=None):
+    timer = PhaseTimer(stop)
     with timer("model"):
         surface = model if isinstance(model, SurfaceModel) else SurfaceModel(checked(model, 3), options.seed)
     scan = checked(scan, MIN_SCAN_POINTS)
@@ -405,6 +407,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
     def turns_of(state):
         key = state.T.tobytes()
         if key not in turned:
+            timer.check()
             turned[key] = _near_symmetric_turns(state, medium, surface, gate, fit_limit)
         return turned[key]
 
@@ -418,9 +421,11 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                       options, [], support)
 
         def polish(state):
+            timer.check()
             return _polish(state, fine, surface, options.tolerance_mm, hopeless)
 
         def widen(state):
+            timer.check()  # a pose at a time: the verdict is the longest phase
             return _widened(state, medium, surface)
 
         def finish(state):
@@ -458,9 +463,9 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
     """Compute ahead of time everything model-side a match may use: the coarse features at the
-    default voxel and the finer ones a partial scan may ask for, and the whole nearest-sample
-    grid the refinement looks up (the symmetries and view samples are found when the SurfaceModel
-    is made).  A batch of matches against one model then pays for it once;
+    default voxel and the finer ones a partial scan may ask for, the whole nearest-sample grids
+    the refinement looks up and a mesh's BVH for exact distances (the symmetries and view samples
+    are found when the SurfaceModel is made).  A batch of matches against one model then pays for it once;
     without it the same work is done lazily, a little in each match (seconds for ~100k samples)."""
     voxel = surface.diagonal / COARSE_VOXELS_PER_DIAGONAL
     while voxel >= surface.diagonal / COARSE_VOXELS_PER_DIAGONAL / SEARCH.max_voxel_refinement:
@@ -468,6 +473,7 @@ def prepare(surface: SurfaceModel) -> SurfaceModel:
         voxel /= 1.25
     for level in range(REFINE.prepared_levels):
         surface.grid_level(level).precompute()
+    surface.build_exact()
     pointops.hand_back_freed_heap()  # the building's temporaries: a kept model's process need not hold them
     return surface
 
@@ -495,14 +501,21 @@ def _checked_options(options: MatchOptions) -> MatchOptions:
 
 
 class PhaseTimer:
-    """Wall time per named phase, for the result's timings and the benchmark."""
+    """Wall time per named phase, for the result's timings and the benchmark; a phase does not start
+    once ``stop`` (a threading.Event) is set: Cancelled instead."""
 
-    def __init__(self):
+    def __init__(self, stop=None):
         self.started = time.perf_counter()
         self.phases: dict[str, float] = {}
+        self.stop = stop
+
+    def check(self, before: str = "its next step") -> None:
+        if self.stop is not None and self.stop.is_set():
+            raise Cancelled(f"match stopped before {before}: nothing waits for it any more")
 
     @contextmanager
     def __call__(self, name: str):
+        self.check(f"its {name}")
         t0 = time.perf_counter()
         try:
             yield

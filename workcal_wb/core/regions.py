@@ -8,6 +8,7 @@ matches its model.  The matches found on the way are kept, so calibration does n
 from __future__ import annotations
 
 import copy
+import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -22,8 +23,8 @@ from . import frames, physics, pointops
 from .errors import InputError, NotFound
 from .geometry import SHAPE_WORDS, Cloud, shape_kind
 from .match import VERDICT, MatchOptions, match
-from .result import (AMBIGUOUS, FAILED, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED, MatchResult,
-                     Reason)
+from .result import (AMBIGUOUS, FAILED, MISFIT, NOISE_ABOVE_TOLERANCE, OK, SEARCH_DOUBT, SPLIT_UNEXPLAINED,
+                     MatchResult, Reason, codes)
 from .surface import GATE_CELLS, SurfaceModel
 
 @dataclass(frozen=True)
@@ -49,6 +50,7 @@ class PlatformSettings:
     ransac_trials: int = 2000
     sample_points: int = 5000
     chunk: int = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
+    hull_chunk: int = 1 << 16  # points weighed against the platform's outline at once
     # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
     band_mm: float = 1.0
 
@@ -179,10 +181,16 @@ def _locate(scan: Cloud, workpiece: SurfaceModel, reference: SurfaceModel, toler
                                                            tolerance_gates=False, blas_threads=blas_threads,
                                                            viewpoint=None if viewpoint is None else tuple(viewpoint),
                                                            support=standing_on(platform)))
-    with ThreadPoolExecutor(max_workers=1) as ahead:  # leaving it waits for a search ahead that was not needed
+    # Leaving the pool waits for a search ahead still running: once both orders are searched nothing
+    # waits for it, and ``stop`` ends it at its next phase.
+    stop = threading.Event()
+    with ThreadPoolExecutor(max_workers=1) as ahead:
         if blas_threads == 1:  # a second thread only with BLAS held to one (its own threads would spin)
-            _search_ahead(ahead, objects, **context)
-        found = _search_in_both_orders(objects, report, context)
+            _search_ahead(ahead, objects, stop=stop, **context)
+        try:
+            found = _search_in_both_orders(objects, report, context)
+        finally:
+            stop.set()
     if isinstance(found, NotFound):
         raise found
     (workpiece_match, workpiece_idx, wp_touching, _), (reference_match, reference_idx, ref_touching, _) = (
@@ -227,19 +235,19 @@ def _search_in_both_orders(objects, report, context: dict):
 
 
 def _search_ahead(pool: ThreadPoolExecutor, objects, scan, points, surfaces, platform, options, searched: dict, labels,
-                  **_) -> None:
+                  stop: threading.Event, **_) -> None:
     """Start the workpiece's search of its likeliest cluster while the reference is looked for: the
     workpiece is then looked for first in that cluster, unless the reference took it (two objects
     apart, the usual scene: the two searches run at once).  The same search, by the same seed, as the
-    one _first_match would make (its result waits in ``searched``)."""
+    one _first_match would make (its result waits in ``searched``); ``stop`` ends it unfinished."""
     likeliest = {role: _candidates(points, objects, labels, surfaces[role])[:1] for role in ("reference", "workpiece")}
     if not likeliest["workpiece"] or (likeliest["reference"]
                                       and np.array_equal(likeliest["reference"][0][0], likeliest["workpiece"][0][0])):
         return
     members, larger = likeliest["workpiece"][0]
     searched[("workpiece", members.tobytes())] = pool.submit(
-        _search, scan, points, members, larger, surfaces["workpiece"], options, "workpiece", _stands_on(platform,
-                                                                                                      surfaces["workpiece"]))
+        _search, scan, points, members, larger, surfaces["workpiece"], options, "workpiece",
+        _stands_on(platform, surfaces["workpiece"]), stop)
 
 
 def _stands_on(platform, surface: SurfaceModel):
@@ -247,12 +255,13 @@ def _stands_on(platform, surface: SurfaceModel):
     return lambda U: not physics.sinks(platform, surface, U)
 
 
-def _search(scan: Cloud, points, members, larger: bool, surface: SurfaceModel, options: dict, role: str, stands):
+def _search(scan: Cloud, points, members, larger: bool, surface: SurfaceModel, options: dict, role: str, stands,
+            stop=None):
     """The model's search of one candidate cluster: in a cluster larger than the model, no pose
     explains most of it, so searching again with other seeds cannot tell a better pose (see
     match_trusted); the split in _first_match judges the one found."""
     return match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
-                         stands, attempts=1 if larger else LOCATE.search_attempts)
+                         stands, attempts=1 if larger else LOCATE.search_attempts, stop=stop)
 
 
 def _unexplained(objects, labels, *regions) -> int:
@@ -334,19 +343,22 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None,
-                  attempts: int = LOCATE.search_attempts) -> MatchResult:
+                  attempts: int = LOCATE.search_attempts, stop=None) -> MatchResult:
     """Match, and when the pose does not explain the region, search again with other seeds and keep
     the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
     nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers.
     ``stands(U)``, when given, says whether a pose is physically possible; a possible pose beats any
-    impossible one.  At most ``attempts`` searches."""
+    impossible one.  At most ``attempts`` searches, and none after one whose best pose does not fit
+    its points within their noise (a misfit): that match searched again itself, drawing more
+    hypotheses (see match), so a cluster that holds no pose of the model is searched once.
+    ``stop`` as in ``match``."""
     def rank(result):
         possible = result.matrix is not None and (stands is None or stands(result.matrix))
         return result.status != FAILED, possible, result.fitness
 
     best = None
     for attempt in range(attempts):
-        result = match(cloud, surface, **{**options, "seed": options.get("seed", 0) + attempt})
+        result = match(cloud, surface, stop=stop, **{**options, "seed": options.get("seed", 0) + attempt})
         # Back to a pose found before, or to one the search before listed beside its best (a tie two
         # searches settle either way).
         again = best is not None and any(_same_pose(result.matrix, U, surface)
@@ -357,6 +369,8 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
             break
         if again:  # another search came back to the same pose: the search is not what falls short
             break
+        if MISFIT in codes(result.reasons):
+            break  # the match searched again itself, drawing more poses, and none fits within the noise
         too_small = result.coverage < options.get("min_coverage", MatchOptions.min_coverage)
         if too_small and result.fitness >= LOCATE.good_fitness[role]:
             break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
@@ -486,7 +500,11 @@ def _up_side(points, outline, centre, normal, band: float, spacing: float) -> fl
     height = (points - centre) @ normal
     off = np.abs(height) > band
     flat = (points[off] - centre) @ axes.T
-    reach = (flat @ hull.equations[:, :2].T + hull.equations[:, 2]).max(axis=1)  # <= 0 inside every edge
+    # <= 0 inside every edge; a block of points at a time (the whole (point, edge) table of a scan's
+    # points off the plane is hundreds of megabytes at 5M points)
+    reach = np.concatenate([(flat[start:start + PLATFORM.hull_chunk] @ hull.equations[:, :2].T
+                             + hull.equations[:, 2]).max(axis=1)
+                            for start in range(0, len(flat), PLATFORM.hull_chunk)] or [np.zeros(0)])
     margin = max(PLATFORM.hull_margin_mm, PLATFORM.hull_margin_spacings * spacing)
     over, inside = reach <= 0, reach <= -margin
     # The platform's own side faces (seen from a low view) lie under its outline: they take no side.

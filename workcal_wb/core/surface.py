@@ -684,6 +684,12 @@ class SurfaceModel:
             cover[flat] = lengths / 2 + ends
         return float(cover.max(initial=0.0))
 
+    def build_exact(self) -> None:
+        """Build a mesh's BVH for the exact distances now (open3d imported with it), not in the first
+        match that asks for them."""
+        if self.is_mesh:
+            self._bvh
+
     @cached_property
     def exact_distance(self):
         """Exact unsigned point-to-mesh distance function (open3d BVH), or None for point models."""

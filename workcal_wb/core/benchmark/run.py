@@ -290,7 +290,7 @@ def _run_scenes(bunny, seed: int, runner, upright_l: bool, queue) -> None:
     from .scenes import run as run_scenes, upright_l_variants
 
     specs = upright_l_variants(seed, bunny is not None) if upright_l else None
-    queue.put(run_scenes(bunny, seed, log=lambda message: None, runner=runner, specs=specs))
+    queue.put(run_scenes(bunny, seed, log=lambda message: None, runner=runner, specs=specs, processes=not upright_l))
 
 
 def _run_verdicts(bunny, seed: int, views: int, runner, queue) -> None:
@@ -401,7 +401,9 @@ def _table(per_method: dict, seed: int, quick: bool, rounds: int, note: str | No
         "scan after scan is matched against one model. For WorkCal that is `match.prepare(SurfaceModel(model))`: "
         "surface samples with normals and their KD-tree, the model's coarse FPFH features (at the default voxel and "
         "the finer ones a partial scan may need) and the nearest-sample grids (the paper's space binning): cells "
-        "of one sample spacing within 16 spacings of the surface, of two within 32. For stock Open3D it is the model's voxel grid, normals and FPFH and "
+        "of one sample spacing within 16 spacings of the surface, of two within 32, of four within 64, and a mesh's "
+        "BVH for exact distances (open3d's, imported with it). For stock "
+        "Open3D it is the model's voxel grid, normals and FPFH and "
         "the full model cloud with normals (the tutorial pipeline would recompute them in every call). Everything "
         "on the scan side is computed inside the timed call. The cases are made once, before the methods run, in a "
         "process of their own, and written a model's group to a file; each method's process loads a group at a "
