@@ -286,9 +286,9 @@ def test_the_l_block_on_its_foot_section_has_its_hundred_scenes_and_counts_a_wro
 
 
 def test_the_scenes_table_holds_warm_processes_to_their_targets():
-    """The scenes table timed calibrations in-process with models made in the call; the targets are for
-    `workcal calibrate` as a warm whole process: its median, 95th percentile and slowest per variant,
-    and the goals missed when the tail is over twice the median or a variant's median over 3 s."""
+    """Beside the in-process times, the scenes table holds `workcal calibrate` as a warm whole process to
+    its targets: its median, 95th percentile and slowest per variant, and the goals missed when the
+    tail is over twice the median or a variant's median 3 s or more."""
     from workcal_wb.core.benchmark.scenes import SceneRow, goals, table
 
     def row(variant, k, warm):

@@ -14,7 +14,7 @@ import pytest
 from workcal_wb.core import frames
 from workcal_wb.core.benchmark.cases import bunny_cases, with_clutter, with_overlap, zoomed_on_workpiece
 from workcal_wb.core.benchmark.tables import pose_errors
-from workcal_wb.core.errors import Cancelled, InputError
+from workcal_wb.core.errors import InputError, Stopped
 from workcal_wb.core.geometry import Cloud
 from workcal_wb.core.match import match
 from workcal_wb.core.benchmark.verdicts import right
@@ -56,17 +56,31 @@ def test_recovers_U_from_a_random_pose_without_a_guess(workpiece, seed, max_deg,
     assert result.fitness > 0.99 and result.rms_mm < 0.15  # 0.1 mm scanner noise
 
 
-def test_a_match_nothing_waits_for_stops_at_its_next_phase(car):
-    """A search whose result is no longer wanted (locate's search ahead) ran to its end, seconds of
-    a core.  Once its ``stop`` is set, a match starts no further phase and raises Cancelled; one
-    whose stop stays unset finds the pose as without it."""
+def test_a_match_nothing_waits_for_stops_at_its_next_phase(car, monkeypatch):
+    """A match whose ``stop`` is set starts no further phase: set before it, it raises errors.Stopped at
+    once; set during the global search, the refinement never starts.  One whose stop stays unset finds
+    the pose as without it."""
     import threading
+
+    from workcal_wb.core import match as match_module
 
     points, model, U = car
     stop = threading.Event()
     stop.set()
-    with pytest.raises(Cancelled, match="nothing waits for it"):
+    with pytest.raises(Stopped, match="before its model"):
         match(Cloud(points, name="scan"), model, stop=stop)
+
+    stop, searched = threading.Event(), match_module._global_candidates
+
+    def search_then_stop(*args, **kwargs):
+        found = searched(*args, **kwargs)
+        stop.set()
+        return found
+
+    monkeypatch.setattr(match_module, "_global_candidates", search_then_stop)
+    with pytest.raises(Stopped, match="before its refine"):
+        match(Cloud(points, name="scan"), model, stop=stop)
+    monkeypatch.undo()
     result = match(Cloud(points, name="scan"), model, stop=threading.Event())
     rotation, displacement = _errors(result, U, model)
     assert result.status == "ok" and rotation < 0.05 and displacement < 0.1

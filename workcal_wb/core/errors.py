@@ -39,3 +39,8 @@ def require_open3d():
 
 class Cancelled(WorkCalError):
     """The user stopped a long job; whatever it was building is discarded."""
+
+
+class Stopped(Exception):
+    """A search was stopped because nothing waits for its result any more (locate's search ahead); it is
+    never read, so it never reaches a user (not a WorkCalError: no user's cancel)."""

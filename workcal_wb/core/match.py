@@ -37,7 +37,7 @@ import numpy as np
 from . import frames, global_search, pointops, visibility
 from .global_search import COARSE_VOXELS_PER_DIAGONAL
 from .edges import centre_on_edges, has_weak_motion, slide, unit_twist
-from .errors import Cancelled, InputError
+from .errors import InputError, Stopped
 from .geometry import SHAPE_WORDS, Cloud, checked, shape_kind
 from .refine import coarse_to_fine, refine, refine_exact
 from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
@@ -279,6 +279,9 @@ class OutlineSettings:
     # max_continued_points of the verdict's points (and at least min_continued_points) make it ambiguous.
     max_continued_points: float = 0.03
     min_continued_points: int = 10
+    # The cell grid levels whose lookups clear points for that check: those a 0.3 mm calibration fills
+    # anyway (a coarser level would be filled, and kept in the model cache, for the check alone).
+    grid_levels: int = 2
     # A face is flat where its samples' normals agree over flat_spacings model spacings (its edge
     # band is that wide); points beside it lie within reach_spacings scan spacings of the mesh
     # (a sparse scan's first point past an edge) and at most reach_samples model spacings, each
@@ -329,8 +332,8 @@ def match(scan: Cloud, model, init: np.ndarray | None = None, options: MatchOpti
     ``init``, when given, is a guess of U and replaces the global search.  Keyword overrides set
     MatchOptions fields.  Bad input raises InputError; a match that cannot be trusted comes back
     with status "failed" or "ambiguous" and the reasons.  ``stop`` (a threading.Event), once set,
-    ends the match with Cancelled at the start of its next phase, or of the verdict's next pose (a
-    search nobody waits for any more).
+    ends the match with errors.Stopped at the start of its next phase, or of the verdict's next pose
+    (a search nobody waits for any more).
     """
     options = _checked_options(replace(options, **overrides))
     with pointops.blas_threads(options.blas_threads):
@@ -502,7 +505,7 @@ def _checked_options(options: MatchOptions) -> MatchOptions:
 
 class PhaseTimer:
     """Wall time per named phase, for the result's timings and the benchmark; a phase does not start
-    once ``stop`` (a threading.Event) is set: Cancelled instead."""
+    once ``stop`` (a threading.Event) is set: errors.Stopped instead."""
 
     def __init__(self, stop=None):
         self.started = time.perf_counter()
@@ -511,7 +514,7 @@ class PhaseTimer:
 
     def check(self, before: str = "its next step") -> None:
         if self.stop is not None and self.stop.is_set():
-            raise Cancelled(f"match stopped before {before}: nothing waits for it any more")
+            raise Stopped(f"match stopped before {before}: nothing waits for it any more")
 
     @contextmanager
     def __call__(self, name: str):
@@ -1074,10 +1077,10 @@ class Judge:
         threshold = self.gate + surface.sample_cover
         # The cell grid clears most points (a cell's sample is no nearer a point than its nearest one),
         # so the KD-tree weighs the rest only, and a cached model's match seldom has to build it; not
-        # through a coarser grid than prepare fills (a CAD mesh's large faces have a large cover), which
-        # would be filled for this alone.
+        # through a coarser grid than OUTLINE.grid_levels (a CAD mesh's large faces have a large cover),
+        # which would be filled for this alone.
         maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
-                     if surface.grid_level_for(threshold) < REFINE.prepared_levels else np.arange(len(moved)))
+                     if surface.grid_level_for(threshold) < OUTLINE.grid_levels else np.arange(len(moved)))
         if self.support is not None:  # the plane the part stands on meets its side faces along its foot
             maybe_off = maybe_off[~self.support.on_plane[maybe_off]]
         if len(maybe_off) < OUTLINE.min_continued_points:

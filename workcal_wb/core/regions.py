@@ -50,7 +50,9 @@ class PlatformSettings:
     ransac_trials: int = 2000
     sample_points: int = 5000
     chunk: int = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
-    hull_chunk: int = 1 << 16  # points weighed against the platform's outline at once
+    # Points weighed against the platform's outline at once: 65,536 x its edges x 8 bytes, a few MB
+    # (the whole table of a 5M-point scan's points off the plane raised a calibration's peak by 170 MB).
+    hull_chunk: int = 1 << 16
     # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
     band_mm: float = 1.0
 
@@ -247,7 +249,7 @@ def _search_ahead(pool: ThreadPoolExecutor, objects, scan, points, surfaces, pla
     members, larger = likeliest["workpiece"][0]
     searched[("workpiece", members.tobytes())] = pool.submit(
         _search, scan, points, members, larger, surfaces["workpiece"], options, "workpiece",
-        _stands_on(platform, surfaces["workpiece"]), stop)
+        _stands_on(platform, surfaces["workpiece"]), stop=stop)
 
 
 def _stands_on(platform, surface: SurfaceModel):
@@ -259,9 +261,9 @@ def _search(scan: Cloud, points, members, larger: bool, surface: SurfaceModel, o
             stop=None):
     """The model's search of one candidate cluster: in a cluster larger than the model, no pose
     explains most of it, so searching again with other seeds cannot tell a better pose (see
-    match_trusted); the split in _first_match judges the one found."""
+    match_trusted); the split in _first_match judges the one found.  ``stop`` as in ``match``."""
     return match_trusted(Cloud(points[members], name=f"{role} candidate in {scan.name}"), surface, options, role,
-                         stands, attempts=1 if larger else LOCATE.search_attempts, stop=stop)
+                         stands, attempts=1 if larger else LOCATE.search_attempts, stop=stop, candidate=True)
 
 
 def _unexplained(objects, labels, *regions) -> int:
@@ -343,15 +345,17 @@ def refit(cloud: Cloud, surface: SurfaceModel, found: MatchResult, options: dict
 
 
 def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str, stands=None,
-                  attempts: int = LOCATE.search_attempts, stop=None) -> MatchResult:
+                  attempts: int = LOCATE.search_attempts, stop=None, candidate: bool = False) -> MatchResult:
     """Match, and when the pose does not explain the region, search again with other seeds and keep
     the pose that explains most of it: a global search can settle on a wrong pose of a partly seen,
     nearly symmetric object (an L-block flipped, or slid along an arm) that still fits its inliers.
     ``stands(U)``, when given, says whether a pose is physically possible; a possible pose beats any
-    impossible one.  At most ``attempts`` searches, and none after one whose best pose does not fit
-    its points within their noise (a misfit): that match searched again itself, drawing more
-    hypotheses (see match), so a cluster that holds no pose of the model is searched once.
-    ``stop`` as in ``match``."""
+    impossible one.  At most ``attempts`` searches.  A ``candidate`` cluster (locate's: it may hold
+    another object) whose searches so far found no pose fitting its points within their noise (a
+    misfit; the match draws SEARCH.retry_samples times the hypotheses itself where its best misses)
+    is searched no more: searched again, such a cluster never came back with a pose that fits
+    (docs/tuning.md).  A region the user picked holds the object: its searches go on.  ``stop`` as
+    in ``match``."""
     def rank(result):
         possible = result.matrix is not None and (stands is None or stands(result.matrix))
         return result.status != FAILED, possible, result.fitness
@@ -369,8 +373,8 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
             break
         if again:  # another search came back to the same pose: the search is not what falls short
             break
-        if MISFIT in codes(result.reasons):
-            break  # the match searched again itself, drawing more poses, and none fits within the noise
+        if candidate and best.status == FAILED and MISFIT in codes(best.reasons):
+            break
         too_small = result.coverage < options.get("min_coverage", MatchOptions.min_coverage)
         if too_small and result.fitness >= LOCATE.good_fitness[role]:
             break  # the pose puts the cloud on the model but it covers too little of it: too small to be it
@@ -500,8 +504,7 @@ def _up_side(points, outline, centre, normal, band: float, spacing: float) -> fl
     height = (points - centre) @ normal
     off = np.abs(height) > band
     flat = (points[off] - centre) @ axes.T
-    # <= 0 inside every edge; a block of points at a time (the whole (point, edge) table of a scan's
-    # points off the plane is hundreds of megabytes at 5M points)
+    # <= 0 inside every edge; a block of points at a time (PLATFORM.hull_chunk)
     reach = np.concatenate([(flat[start:start + PLATFORM.hull_chunk] @ hull.equations[:, :2].T
                              + hull.equations[:, 2]).max(axis=1)
                             for start in range(0, len(flat), PLATFORM.hull_chunk)] or [np.zeros(0)])

@@ -121,7 +121,7 @@ def measure(seed: int, quick: bool, log) -> list:
 
 
 def _calibrate_rounds(rows: dict, scan: Path, model: Path, model_points: np.ndarray, seed: int, cache: Path, log,
-                      r: int) -> None:
+                      round_index: int) -> None:
     """The 5M scan's whole scene calibrated (automatic regions, no hints), cold and warm, into ``rows``."""
     from .processes import PYTHON, timed
 
@@ -129,7 +129,7 @@ def _calibrate_rounds(rows: dict, scan: Path, model: Path, model_points: np.ndar
     out = FOLDER / "calibrate-out"
     shutil.rmtree(cache, ignore_errors=True)
     for run in (COLD, WARM):
-        log(f"large scans: calibrate 5M {run}, round {r + 1}")
+        log(f"large scans: calibrate 5M {run}, round {round_index + 1}")
         shutil.rmtree(out, ignore_errors=True)
         elapsed, peak, _ = timed([PYTHON, "-m", "workcal_wb", "calibrate", "--scan", str(scan), "--workpiece",
                                   str(model), "--reference", str(reference), "--seed", str(seed), "--cache",
@@ -184,10 +184,12 @@ def table(rows: list, load: tuple, rounds: int = ROUNDS) -> tuple[str, list]:
              "as whole processes on binary PLY files (float32 x y z, mm; `core/benchmark/large.py`): the car scene "
              "(car, platform and L-block) captured at a 0.12 mm pitch from 0.8 m, one capture for the 5M scan and "
              "four interleaved a fraction of a pixel apart, merged in the first capture's frame, for the 20M scan; "
-             "the car's mesh as the model; no initial guess; the pose checked against the simulation's truth. "
+             "the car's mesh as the model (and the L-block's for calibrate); no initial guess; the pose checked against the "
+             "simulation's truth. "
              "Written once into build/bench-large and reused. Each figure is the whole process measured from "
-             "outside: interpreter start, imports, reading both files, preparing the model (cold: an empty model "
-             "cache) or loading it (warm: the cache the cold run filled), the match and writing result.json. "
+             "outside: interpreter start, imports, reading the files, preparing the models (cold: an empty model "
+             "cache) or loading them (warm: the cache the cold run filled), the match and writing result.json "
+             "(calibrate: finding the regions, both matches, the checks, the bootstrap and the report too). "
              "Peak memory: the process's own largest resident set (Python and libraries included). A scan of more "
              "than 6 million points is thinned while it is read, in chunks of 1M records, one real point per voxel "
              "(never the whole file in memory), and says so on stdout and in result.json's warnings"
