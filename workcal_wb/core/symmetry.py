@@ -56,6 +56,9 @@ REFINE_STEPS, MIN_LANDED = 8, 0.997
 # with their SELF_NEIGHBOURS nearest features; SELF_SAMPLES RANSAC samples, SELF_TRIED poses refined.
 NEAR_SELF_SHARE, LANDED_SPACINGS, MIN_TURN_DEG, MAX_NEAR_SELF_MAPS = 0.8, 2.0, 20.0, 2
 SELF_APART, SELF_NEIGHBOURS, SELF_SAMPLES, SELF_TRIED = 0.1, 4, 20000, 6
+# Coarse points weighed against all the others at once: their offsets, 64 x n x 3 doubles, stay a few MB
+# (at 256 rows they were most of a prepared model's peak memory).
+SELF_ROWS = 64
 # Half turns about this many axes spread over a hemisphere are screened by how near their moved samples
 # land (the median distance: a near self-map leaves a part of the surface off), the best few refined.
 HALF_TURN_AXES, HALF_TURNS_TRIED, HALF_TURN_SCREEN = 200, 4, 100
@@ -323,8 +326,8 @@ def _self_registrations(coarse_points, coarse_normals, features, voxel: float, d
     squared = np.einsum("ij,ij->i", features, features)
     k = min(SELF_NEIGHBOURS, n - 1)
     pairs = []
-    for start in range(0, n, 256):  # a block of rows at a time: n x n distances would not fit for large models
-        rows = slice(start, min(start + 256, n))
+    for start in range(0, n, SELF_ROWS):  # a block of rows at a time: n x n distances would not fit
+        rows = slice(start, min(start + SELF_ROWS, n))
         d = squared[rows, None] - 2 * features[rows] @ features.T + squared[None]
         d[np.linalg.norm(coarse_points[rows, None] - coarse_points[None], axis=2) < SELF_APART * diagonal] = np.inf
         j = np.argpartition(d, k - 1, axis=1)[:, :k]
