@@ -47,3 +47,20 @@ def test_a_precomputed_grid_holds_in_every_cell_what_a_query_of_its_centre_gives
     # again as many were allocated).
     near_bricks = np.unique(keys[expected > 0] // BRICK**3)
     assert len(grid._rows) == grid._used and grid._used - 2 <= len(near_bricks)
+
+
+@pytest.mark.slow
+def test_prepare_fills_the_grid_levels_a_depth_cameras_gates_ask_for():
+    """A depth camera's 2.5 mm tolerance asks for gates of the third grid level: prepare fills it with
+    the two finer ones (and a mesh's BVH), so a batch of matches reads those cells instead of filling
+    them in each match; a coarser level stays unfilled, and no grid is said filled before prepare."""
+    from workcal_wb.core.match import REFINE, prepare
+    from workcal_wb.core.simulate import shapes
+    from workcal_wb.core.surface import SurfaceModel
+
+    surface = SurfaceModel(shapes.box((60.0, 40.0, 20.0)), 0)
+    assert not any(surface.grid_filled(level) for level in range(4))
+    prepare(surface)
+    assert REFINE.prepared_levels == 3
+    assert [surface.grid_filled(level) for level in range(4)] == [True, True, True, False]
+    assert "_bvh" in vars(surface)  # built (a cached property)

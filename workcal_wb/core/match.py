@@ -1078,9 +1078,10 @@ class Judge:
         # The cell grid clears most points (a cell's sample is no nearer a point than its nearest one),
         # so the KD-tree weighs the rest only, and a cached model's match seldom has to build it; not
         # through a coarser grid than OUTLINE.grid_levels (a CAD mesh's large faces have a large cover),
-        # which would be filled for this alone.
+        # which would be filled for this alone, unless prepare filled it.
+        level = surface.grid_level_for(threshold)
         maybe_off = (np.flatnonzero(~surface.nearest_cell(moved, threshold)[2])
-                     if surface.grid_level_for(threshold) < OUTLINE.grid_levels else np.arange(len(moved)))
+                     if level < OUTLINE.grid_levels or surface.grid_filled(level) else np.arange(len(moved)))
         if self.support is not None:  # the plane the part stands on meets its side faces along its foot
             maybe_off = maybe_off[~self.support.on_plane[maybe_off]]
         if len(maybe_off) < OUTLINE.min_continued_points:

@@ -469,6 +469,10 @@ class SurfaceModel:
             self._grids[level] = NearestGrid.around(self.points, self._tree, cell, GATE_CELLS * cell)
         return self._grids[level]
 
+    def grid_filled(self, level: int) -> bool:
+        """Whether the cell grid of ``level`` has every cell filled (match.prepare): its lookups fill nothing."""
+        return level in self._grids and self._grids[level].complete
+
     def grid(self, cell: float, bound: float) -> NearestGrid:
         """A cell grid of its own cell size and bound (cached), e.g. for a method that fills it
         ahead of time."""

@@ -59,6 +59,9 @@ SELF_APART, SELF_NEIGHBOURS, SELF_SAMPLES, SELF_TRIED = 0.1, 4, 20000, 6
 # Coarse points weighed against all the others at once: their offsets, 64 x n x 3 doubles, stay a few MB
 # (at 256 rows they were most of a prepared model's peak memory).
 SELF_ROWS = 64
+# Poses voted on at once against all the correspondences (16 x n x 3 doubles, two arrays): at the
+# RANSAC's default they were the rest of that peak.
+SELF_VOTED = 16
 # Half turns about this many axes spread over a hemisphere are screened by how near their moved samples
 # land (the median distance: a near self-map leaves a part of the surface off), the best few refined.
 HALF_TURN_AXES, HALF_TURNS_TRIED, HALF_TURN_SCREEN = 200, 4, 100
@@ -338,7 +341,7 @@ def _self_registrations(coarse_points, coarse_normals, features, voxel: float, d
         return np.empty((0, 4, 4))
     poses, votes = ransac_poses(coarse_points[i], coarse_points[j], coarse_normals[i], coarse_normals[j],
                                 1.5 * voxel, np.random.default_rng(seed), samples=SELF_SAMPLES, keep=200,
-                                min_edge=3 * voxel)
+                                min_edge=3 * voxel, chunk=SELF_VOTED)
     # Apart by the RANSAC's own precision: one turn aligned two ways (an L's legs at their outer corner or
     # at their ends) is two local minima of the refinement, and only one is the best self-map.
     return poses[distinct(poses, votes, coarse_points.mean(axis=0), 10.0, 2 * voxel, SELF_TRIED)]
