@@ -51,7 +51,7 @@ class PlatformSettings:
     sample_points: int = 5000
     chunk: int = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
     # Points weighed against the platform's outline at once: 65,536 x its edges x 8 bytes, a few MB
-    # (the whole table of a 5M-point scan's points off the plane raised a calibration's peak by 170 MB).
+    # (the whole table of a 5M-point scan's points off the plane is hundreds).
     hull_chunk: int = 1 << 16
     # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
     band_mm: float = 1.0

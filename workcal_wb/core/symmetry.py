@@ -56,12 +56,10 @@ REFINE_STEPS, MIN_LANDED = 8, 0.997
 # with their SELF_NEIGHBOURS nearest features; SELF_SAMPLES RANSAC samples, SELF_TRIED poses refined.
 NEAR_SELF_SHARE, LANDED_SPACINGS, MIN_TURN_DEG, MAX_NEAR_SELF_MAPS = 0.8, 2.0, 20.0, 2
 SELF_APART, SELF_NEIGHBOURS, SELF_SAMPLES, SELF_TRIED = 0.1, 4, 20000, 6
-# Coarse points weighed against all the others at once: their offsets, 64 x n x 3 doubles, stay a few MB
-# (at 256 rows they were most of a prepared model's peak memory).
-SELF_ROWS = 64
-# Poses voted on at once against all the correspondences (16 x n x 3 doubles, two arrays): at the
-# RANSAC's default they were the rest of that peak.
-SELF_VOTED = 16
+# Coarse points weighed against all the others at once (their offsets, 64 x n x 3 doubles), and poses
+# voted on at once against all the correspondences (16 x n x 3 doubles, two arrays): a few MB each, where
+# a model's preparation reaches its peak memory.
+SELF_ROWS, SELF_VOTED = 64, 16
 # Half turns about this many axes spread over a hemisphere are screened by how near their moved samples
 # land (the median distance: a near self-map leaves a part of the surface off), the best few refined.
 HALF_TURN_AXES, HALF_TURNS_TRIED, HALF_TURN_SCREEN = 200, 4, 100
