@@ -371,7 +371,8 @@ def test_a_reference_model_larger_than_every_object_is_not_searched_for(plain, m
     huge.name = "huge.stl"
     searched = []
     original = regions_module._search
-    monkeypatch.setattr(regions_module, "_search", lambda *args: searched.append(args[-2]) or original(*args))
+    monkeypatch.setattr(regions_module, "_search",  # (scan, points, members, larger, surface, options, role, ...)
+                        lambda *args, **kwargs: searched.append(args[6]) or original(*args, **kwargs))
     result = calibrate(scan.cloud(), scene.workpiece_model(), huge)
     assert_not_found(result, r"reference object huge.stl: .*no object on the platform is the size of the model")
     assert searched and "reference" not in searched  # the workpiece was searched for, the reference never
