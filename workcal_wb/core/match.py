@@ -965,9 +965,10 @@ class Judge:
         pose found explains as well as the best stays that evidence."""
         sig, refined = self.options.rival_significance, []
         for i in range(1, len(poses)):
+            if frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.min_rival_turn_deg:
+                continue
             found_behind = visibility.compare(weighed[0].cells, weighed[i].cells, VERDICT.cell_variance_floor)
-            if (frames.rotation_between_deg(poses[i].T, poses[0].T) <= RIVALS.min_rival_turn_deg
-                    or found_behind >= VIEW.close_call * sig):
+            if found_behind >= VIEW.close_call * sig:
                 continue
             done = finish(poses[i])
             evidence = self.evidence(done.T)

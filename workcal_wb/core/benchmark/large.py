@@ -104,16 +104,11 @@ def measure(seed: int, quick: bool, log) -> list:
                 outcome = json.loads(result.read_text())
                 matrix = outcome["matrix"]
                 rotation, displacement = pose_errors(None if matrix is None else np.array(matrix), truth, model_points)
-                kept = rows.get((name, run))
-                if kept is None:
-                    rows[(name, run)] = {
-                        "scan": name, "command": "match", "run": run, "file_points": _vertex_count(path),
-                        "file_mb": path.stat().st_size / 1e6,
-                        "used_points": outcome["n_scan_points"], "status": outcome["status"],
-                        "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed,
-                        "peak_mb": peak, "thinned": [w for w in outcome["warnings"] if "thinned while reading" in w]}
-                else:
-                    kept["time_s"], kept["peak_mb"] = min(kept["time_s"], elapsed), max(kept["peak_mb"], peak)
+                _keep(rows, (name, run), {
+                    "scan": name, "command": "match", "run": run, **_file_facts(path),
+                    "used_points": outcome["n_scan_points"], "status": outcome["status"],
+                    "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed,
+                    "peak_mb": peak, "thinned": [w for w in outcome["warnings"] if "thinned while reading" in w]})
         if "5M" in scans:
             _calibrate_rounds(rows, scans["5M"][0], model, model_points, seed, cache, log, r)
     shutil.rmtree(cache, ignore_errors=True)
@@ -137,17 +132,23 @@ def _calibrate_rounds(rows: dict, scan: Path, model: Path, model_points: np.ndar
         outcome = json.loads((out / "result.json").read_text())
         found = outcome["W"]
         rotation, displacement = pose_errors(None if found is None else np.array(found), W, model_points)
-        kept = rows.get(("5M calibrate", run))
-        if kept is None:
-            rows[("5M calibrate", run)] = {
-                "scan": "5M", "command": "calibrate", "run": run, "file_points": _vertex_count(scan),
-                "file_mb": scan.stat().st_size / 1e6, "used_points": outcome["inputs"]["scan_points"],
-                "status": outcome["status"],
-                "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed, "peak_mb": peak,
-                "thinned": []}
-        else:
-            kept["time_s"], kept["peak_mb"] = min(kept["time_s"], elapsed), max(kept["peak_mb"], peak)
+        _keep(rows, ("5M calibrate", run), {
+            "scan": "5M", "command": "calibrate", "run": run, **_file_facts(scan),
+            "used_points": outcome["inputs"]["scan_points"], "status": outcome["status"],
+            "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed, "peak_mb": peak,
+            "thinned": []})
     shutil.rmtree(out, ignore_errors=True)
+
+
+def _keep(rows: dict, key: tuple, row: dict) -> None:
+    """Into ``rows``: the first round's ``row`` for ``key``, its time the fastest round's, its memory the
+    largest round's."""
+    kept = rows.setdefault(key, row)
+    kept["time_s"], kept["peak_mb"] = min(kept["time_s"], row["time_s"]), max(kept["peak_mb"], row["peak_mb"])
+
+
+def _file_facts(path: Path) -> dict:
+    return {"file_points": _vertex_count(path), "file_mb": path.stat().st_size / 1e6}
 
 
 def _vertex_count(path: Path) -> int:

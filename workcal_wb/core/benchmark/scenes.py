@@ -229,7 +229,7 @@ def table(rows: list, seed: int, where: str = "in this process", upright_l: bool
     def fmt(x, digits):
         return "-" if not np.isfinite(x) else f"{x:.{digits}f}"
 
-    warm = all(np.isfinite(r.warm_s) for r in rows) and bool(rows)
+    warm = warm_figures(rows) is not None
 
     if upright_l:
         heading, what = UPRIGHT_L_HEADING, (
