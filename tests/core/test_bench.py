@@ -159,25 +159,52 @@ def test_whole_process_peak_memory_is_the_processs_own(tmp_path):
 
 
 def test_whole_process_table_flags_missed_targets():
-    from workcal_wb.core.benchmark.processes import COLD, IN_PROCESS, KISS, STOCK as PEER, WARM, Run, table
+    from workcal_wb.core.benchmark.processes import (BUNNY_CLEAN, COLD, IN_PROCESS, KISS, STOCK as PEER, WARM, Run,
+                                                     table)
 
-    def runs(command, method, time_s, peak, success=True, n=4):
-        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0, time_s / 2) for i in range(n)]
+    def runs(command, method, time_s, peak, success=True, n=4, family=BUNNY_CLEAN):
+        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0, time_s / 2,
+                    family if command == "match" else "demo scene") for i in range(n)]
 
     good = (runs("match", COLD, 0.8, 300) + runs("match", WARM, 0.2, 300) + runs("match", PEER, 1.0, 400)
-            + runs("match", KISS, 0.8, 200) + runs("calibrate", WARM, 0.9, 350)
+            + runs("match", KISS, 0.8, 200) + runs("match", WARM, 0.4, 90, family="depth camera")
+            + runs("match", PEER, 0.9, 90, family="depth camera") + runs("calibrate", WARM, 0.9, 350)
             + runs("calibrate", IN_PROCESS, 0.25, 350))
     text, missed = table(good, [PEER, KISS], None)
     assert not missed and "All met." in text
-    assert "| match | WorkCal warm | 4 | 100% | 0.200 | 0.25 | 0.100 | 300 | 300 |" in text  # vs the faster peer (0.8 s)
+    # vs stock (1.0 s) and vs the faster peer (0.8 s)
+    assert "| match | bunny clean | WorkCal warm | 4 | 100% | 0.200 | 0.20 | 0.25 | 0.100 | 300 | 300 |" in text
+    assert "| match | depth camera | WorkCal warm | 4 | 100% | 0.400 | 0.44 | 0.44 | 0.200 | 90 | 90 |" in text
     bad = (runs("match", WARM, 0.3, 500, success=False) + runs("match", PEER, 1.0, 400)
-           + runs("match", KISS, 0.6, 200) + runs("calibrate", WARM, 1.2, 350)
+           + runs("match", KISS, 0.6, 200) + runs("match", WARM, 0.5, 95, family="depth camera")
+           + runs("match", PEER, 0.9, 90, family="depth camera") + runs("calibrate", WARM, 1.2, 350)
            + runs("calibrate", IN_PROCESS, 0.4, 350))
     text, missed = table(bad, [PEER, KISS], "a note")
-    assert len(missed) == 4 and "Note: a note" in text
-    assert "0.50 x KISS-Matcher" in missed[0] and "success 75% vs 100%" in missed[0]
-    assert "1.20 s as a process" in missed[1] and "0.40 s in-process" in missed[2]
-    assert "500 MB above stock Open3D's 400 MB" in missed[3]  # match against match: calibrate's 350 MB not counted
+    assert len(missed) == 7 and "Note: a note" in text
+    assert missed[0].startswith("whole processes: bunny clean: warm match 0.300 s (0.30 x Open3D stock")
+    assert "success 75% vs 100%" in missed[0]
+    assert "500 MB above stock Open3D's 400 MB" in missed[1]  # match against match: calibrate's 350 MB not counted
+    assert "depth camera: warm match 0.500 s (0.56 x Open3D stock's 0.900 s, target 0.5)" in missed[2]
+    assert "depth camera: WorkCal match peak memory 95 MB above stock Open3D's 90 MB" in missed[3]
+    assert "0.50 x KISS-Matcher" in missed[4]
+    assert "1.20 s as a process" in missed[5] and "0.40 s in-process" in missed[6]
+
+
+def test_the_whole_process_cases_are_the_match_tables_written_as_files(tmp_path, bunny):
+    """Each case's scan and model files read back as the case's points, one model file per model,
+    and each case keeps its family and tolerance."""
+    from workcal_wb.core.benchmark.cases import BUNNY_SCANS, iter_bunny_cases
+    from workcal_wb.core.benchmark.processes import write_match_files
+    from workcal_wb.core.readers import read_cloud
+
+    files = next(write_match_files(tmp_path, bunny, 0, quick=True))
+    cases = list(iter_bunny_cases(bunny, 0, scans=BUNNY_SCANS[:2]))
+    assert [f.name for f in files] == [c.name for c in cases] and len({f.model for f in files}) == 1
+    assert {f.family for f in files} == {c.group for c in cases} and {f.tolerance_mm for f in files} == {0.3}
+    for written, case in zip(files, cases):
+        assert np.allclose(read_cloud(written.scan).points, case.scan, atol=1e-9)
+        assert np.array_equal(written.truth, case.truth)
+    assert np.allclose(read_cloud(files[0].model).points, cases[0].model.points, atol=1e-9)
 
 
 def test_a_section_replaces_its_old_version_and_keeps_the_rest():

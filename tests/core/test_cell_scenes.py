@@ -178,40 +178,53 @@ def test_a_search_ahead_the_reference_made_needless_is_stopped(monkeypatch):
 @pytest.mark.slow
 def test_a_cluster_that_holds_no_pose_of_the_reference_is_searched_once(monkeypatch):
     """With clay joining the objects, a small cluster beside them (594 points) is the reference's
-    likeliest, and no pose of the L-block fits it within the noise.  Searched again with other seeds,
-    such a cluster never comes back with one (docs/tuning.md): it is searched once, and the calibration
-    is right."""
-    from workcal_wb.core import regions
+    likeliest, and no pose of the L-block fits it within the noise.  Searched again, with other seeds
+    or with more hypotheses, such a cluster never comes back with one (docs/tuning.md): it is searched
+    once, one global search, and the calibration is right."""
+    import collections
+    import threading
+
+    from workcal_wb.core import match as match_module, regions
 
     searched, original = [], regions.match  # (role, points, seed, misfit) of each search while locating
+    drawn, local, draw = collections.Counter(), threading.local(), match_module._global_candidates
 
     def recorded(cloud, surface, *args, **kwargs):
+        local.search = (cloud.name.split()[0], len(cloud.points), kwargs.get("seed"))
         result = original(cloud, surface, *args, **kwargs)
-        searched.append((cloud.name.split()[0], len(cloud.points), kwargs.get("seed"), MISFIT in codes(result.reasons)))
+        searched.append((*local.search, MISFIT in codes(result.reasons)))
         return result
 
+    def counted(*args, **kwargs):  # the global searches of each search (the threads search apart)
+        drawn[local.search] += 1
+        return draw(*args, **kwargs)
+
     monkeypatch.setattr(regions, "match", recorded)
+    monkeypatch.setattr(match_module, "_global_candidates", counted)
     cell = cell_scan(CellSpec(layout="bridge", frame="arbitrary", seed=4))
     result = _calibrated(cell)
-    misfits = {(role, points) for role, points, _, misfit in searched if misfit}
+    misfits = [search for *search, misfit in searched if misfit]
     assert misfits, searched
-    for role, points in misfits:
+    for role, points, seed in misfits:
         assert len([s for s in searched if s[:2] == (role, points)]) == 1, searched
+        assert drawn[(role, points, seed)] == 1, (drawn, searched)
     assert result.status == "ok", result.reasons
     rotation, displacement = _errors(result.W, cell.W, cell.workpiece_model)
     assert rotation < 0.05 and displacement < 0.1
 
 
 def test_a_region_the_user_picked_is_searched_again_after_a_misfit(monkeypatch):
-    """A misfit ends the searches of a cluster locate weighs (it may hold another object), not those of
-    a region the user picked, which holds the object: there the other seeds are tried."""
+    """A misfit ends the searches of a cluster locate weighs (it may hold another object), and its match
+    draws no second search; not those of a region the user picked, which holds the object: there the
+    other seeds are tried, each match free to search again."""
     from workcal_wb.core import regions
     from workcal_wb.core.result import MatchResult
 
-    seeds = []
+    seeds, searched_again = [], []  # each search's seed, and whether its match may search again itself
 
     def misfit(cloud, surface, stop=None, **options):
         seeds.append(options["seed"])
+        searched_again.append(options["search_again"])
         pose = np.eye(4)
         pose[0, 3] = 10.0 * len(seeds)  # another pose each time
         return MatchResult("failed", "robust", pose, fitness=0.9,
@@ -220,10 +233,10 @@ def test_a_region_the_user_picked_is_searched_again_after_a_misfit(monkeypatch):
     monkeypatch.setattr(regions, "match", misfit)
     cloud, model = Cloud(np.zeros((3, 3))), SurfaceModel(shapes.l_block())
     assert regions.match_trusted(cloud, model, {"seed": 0}, "reference", candidate=True).status == "failed"
-    assert seeds == [0]
-    seeds.clear()
+    assert seeds == [0] and searched_again == [False]
+    seeds.clear(), searched_again.clear()
     regions.match_trusted(cloud, model, {"seed": 0}, "reference")
-    assert seeds == [0, 1, 2]
+    assert seeds == [0, 1, 2] and searched_again == [True] * 3
 
 
 @pytest.mark.slow

@@ -79,6 +79,9 @@ class MatchOptions:
     # the scan's distortion has been read (a scaled scan misfits, and says why there).
     tolerance_gates: bool = True
     max_fine_points: int = 20000  # the final pass uses a random subset of this size (statistics: VERDICT.points)
+    # Whether a search whose verdict's best misfits the scan searches once more (SEARCH.retry_samples); a
+    # calibration's search of a cluster that may hold another object does not (regions.match_trusted).
+    search_again: bool = True
     seed: int = 0
     blas_threads: int | None = 1  # OpenBLAS threads while matching (pointops.blas_threads); None: leave them
 
@@ -440,7 +443,8 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
-    if init is None and not chosen.sigma <= fit_limit and judge.scan_noise <= options.tolerance_mm:
+    if (init is None and options.search_again and not chosen.sigma <= fit_limit
+            and judge.scan_noise <= options.tolerance_mm):
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
         # sees little of the model).  Search once more, drawing SEARCH.retry_samples times as many
         # hypotheses (only such scans pay for it; not one noisier than the tolerance, which fails

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import pointops
 from .robust import MAD_TO_SIGMA, gauss_newton_step, geman_mcclure
 from .surface import SurfaceModel
 
@@ -44,7 +45,7 @@ def refine(points: np.ndarray, model: SurfaceModel, T: np.ndarray, gate: float, 
         found, r, normals = model.tangent_planes(moved, gate)
         if len(r) < 6:
             break
-        state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r)))
+        state.sigma = MAD_TO_SIGMA * pointops.median(np.abs(r))
         step = gauss_newton_step(moved[found], normals, r, geman_mcclure(r, scale))
         state.T = step @ state.T
         state.iterations = it + 1
@@ -80,7 +81,7 @@ def refine_exact(points: np.ndarray, model: SurfaceModel, state: RefineState,
         directions = np.where(past_edge(offset, normals[found])[:, None],
                               offset / np.maximum(distance[found], 1e-12)[:, None], normals[found])
         r = np.einsum("ij,ij->i", offset, directions)
-        state.sigma = MAD_TO_SIGMA * float(np.median(np.abs(r)))
+        state.sigma = MAD_TO_SIGMA * pointops.median(np.abs(r))
         step = gauss_newton_step(moved, directions, r, geman_mcclure(r, state.scale))
         state.T = step @ state.T
         state.iterations += 1

@@ -352,17 +352,18 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
     ``stands(U)``, when given, says whether a pose is physically possible; a possible pose beats any
     impossible one.  At most ``attempts`` searches.  A ``candidate`` cluster (locate's: it may hold
     another object) whose searches so far found no pose fitting its points within their noise (a
-    misfit; the match draws SEARCH.retry_samples times the hypotheses itself where its best misses)
-    is searched no more: searched again, such a cluster never came back with a pose that fits
-    (docs/tuning.md).  A region the user picked holds the object: its searches go on.  ``stop`` as
-    in ``match``."""
+    misfit) is searched no more, neither by other seeds nor by the match's own second search with
+    more hypotheses (MatchOptions.search_again): searched again, such a cluster never came back with a
+    pose that fits (docs/tuning.md).  A region the user picked holds the object: its searches go on.
+    ``stop`` as in ``match``."""
     def rank(result):
         possible = result.matrix is not None and (stands is None or stands(result.matrix))
         return result.status != FAILED, possible, result.fitness
 
     best = None
     for attempt in range(attempts):
-        result = match(cloud, surface, stop=stop, **{**options, "seed": options.get("seed", 0) + attempt})
+        result = match(cloud, surface, stop=stop,
+                       **{**options, "seed": options.get("seed", 0) + attempt, "search_again": not candidate})
         # Back to a pose found before, or to one the search before listed beside its best (a tie two
         # searches settle either way).
         again = best is not None and any(_same_pose(result.matrix, U, surface)
