@@ -163,8 +163,8 @@ def test_whole_process_table_flags_missed_targets():
                                                      table)
 
     def runs(command, method, time_s, peak, success=True, n=4, family=BUNNY_CLEAN):
-        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0, time_s / 2,
-                    family if command == "match" else "demo scene") for i in range(n)]
+        return [Run(command, method, f"case {i}", time_s, peak, success or i > 0,
+                    family if command == "match" else "demo scene", time_s / 2) for i in range(n)]
 
     good = (runs("match", COLD, 0.8, 300) + runs("match", WARM, 0.2, 300) + runs("match", PEER, 1.0, 400)
             + runs("match", KISS, 0.8, 200) + runs("match", WARM, 0.4, 90, family="depth camera")
@@ -191,20 +191,31 @@ def test_whole_process_table_flags_missed_targets():
 
 
 def test_the_whole_process_cases_are_the_match_tables_written_as_files(tmp_path, bunny):
-    """Each case's scan and model files read back as the case's points, one model file per model,
-    and each case keeps its family and tolerance."""
-    from workcal_wb.core.benchmark.cases import BUNNY_SCANS, iter_bunny_cases
+    """Each case's scan and model files read back as the case's points, one model file per group,
+    each case with its own name, family and tolerance (the depth camera's above the others); the quick
+    subset keeps the first case of each family."""
+    from workcal_wb.core.benchmark.cases import BUNNY_SCANS, iter_bunny_cases, iter_depth_camera_groups
     from workcal_wb.core.benchmark.processes import write_match_files
     from workcal_wb.core.readers import read_cloud
 
-    files = next(write_match_files(tmp_path, bunny, 0, quick=True))
-    cases = list(iter_bunny_cases(bunny, 0, scans=BUNNY_SCANS[:2]))
-    assert [f.name for f in files] == [c.name for c in cases] and len({f.model for f in files}) == 1
-    assert {f.family for f in files} == {c.group for c in cases} and {f.tolerance_mm for f in files} == {0.3}
-    for written, case in zip(files, cases):
-        assert np.allclose(read_cloud(written.scan).points, case.scan, atol=1e-9)
-        assert np.array_equal(written.truth, case.truth)
-    assert np.allclose(read_cloud(files[0].model).points, cases[0].model.points, atol=1e-9)
+    def groups():
+        return [list(iter_bunny_cases(bunny, 0, scans=BUNNY_SCANS[:2])), next(iter_depth_camera_groups(0, quick=True))]
+
+    made = groups()
+    written = list(write_match_files(tmp_path, iter(groups())))
+    assert len(written) == 2 and written[0][0].model != written[1][0].model
+    for files, cases in zip(written, made):
+        assert [(f.name, f.family, f.tolerance_mm) for f in files] == [(c.name, c.group, c.tolerance_mm) for c in cases]
+        assert len({f.model for f in files}) == 1
+        assert np.allclose(read_cloud(files[0].model).points, cases[0].model.points, atol=1e-9)
+        for file, case in zip(files, cases):
+            assert np.allclose(read_cloud(file.scan).points, case.scan, atol=1e-9)
+            assert np.array_equal(file.truth, case.truth)
+    assert written[1][0].tolerance_mm > written[0][0].tolerance_mm
+    (tmp_path / "quick").mkdir()
+    quick = [f for files in write_match_files(tmp_path / "quick", iter(groups()), one_per_family=True) for f in files]
+    assert [f.name for f in quick] == [c.name for c in made[0][:5]] + [made[1][0].name]
+    assert len({f.family for f in quick}) == len(quick)
 
 
 def test_a_section_replaces_its_old_version_and_keeps_the_rest():

@@ -86,6 +86,31 @@ def test_a_match_nothing_waits_for_stops_at_its_next_phase(car, monkeypatch):
     assert result.status == "ok" and rotation < 0.05 and displacement < 0.1
 
 
+def test_a_search_whose_best_misfits_searches_again_unless_told_not_to(monkeypatch):
+    """A ball's cap holds no pose of the L-block: the verdict's best misfits, and the match searches
+    once more with more hypotheses; with search_again off (a calibration's clusters that may hold
+    another object) it fails the same way after one search."""
+    from workcal_wb.core import match as match_module
+
+    rng = np.random.default_rng(3)
+    directions = rng.normal(size=(1500, 3))
+    directions[:, 2] = np.abs(directions[:, 2]) + 1.0  # the upper cap of a 40 mm ball
+    cap = 40.0 * directions / np.linalg.norm(directions, axis=1, keepdims=True) + rng.normal(0, 0.02, (1500, 3))
+    searches, search = [], match_module._global_candidates
+
+    def counted(*args, **kwargs):
+        searches.append(kwargs.get("min_voxel"))
+        return search(*args, **kwargs)
+
+    monkeypatch.setattr(match_module, "_global_candidates", counted)
+    model = SurfaceModel(shapes.l_block())
+    for search_again, expected in ((True, 2), (False, 1)):
+        searches.clear()
+        result = match(Cloud(cap, name="cap"), model, search_again=search_again)
+        assert result.status == "failed" and MISFIT in codes(result.reasons), result.reasons
+        assert len(searches) == expected
+
+
 @pytest.mark.slow
 def test_partial_overlap(car):
     points, surface, U = car

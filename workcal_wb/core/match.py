@@ -10,7 +10,8 @@ then judges the best pose and its rivals (other poses of the search, and the mod
 turns, always tried) by what the sensor should have seen from each (visibility.py): scan points on
 the model's visible surface count for a pose, scan points it would hide and model surface missing
 from the scan count against it.  When the verdict's best does not fit the scan within its limit,
-the search runs once more with more hypotheses (only such scans pay for it).  A pose is "ok" only
+the search runs once more with more hypotheses (only such scans pay for it; not where
+MatchOptions.search_again is off, as for a calibration's clusters that may hold another object).  A pose is "ok" only
 when it explains the scan to within the scan's own noise, which must not exceed the tolerance,
 covers a real part of the model, leaves no large share of the view contradicted, pins every
 motion, and no rival is within the statistical noise of its evidence (given the number of view
@@ -113,7 +114,7 @@ class SearchSettings:
     hypotheses_apart: tuple = (15.0, 0.1)
     refined_apart: tuple = (5.0, 0.05)
     # A search whose best pose does not fit the scan within the verdict's limit is run once more with
-    # this many times the RANSAC hypotheses.
+    # this many times the RANSAC hypotheses (unless MatchOptions.search_again is off).
     retry_samples: int = 5
 
 

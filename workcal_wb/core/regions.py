@@ -362,8 +362,8 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
 
     best = None
     for attempt in range(attempts):
-        result = match(cloud, surface, stop=stop,
-                       **{**options, "seed": options.get("seed", 0) + attempt, "search_again": not candidate})
+        result = match(cloud, surface, stop=stop, **{**options, "seed": options.get("seed", 0) + attempt,
+                                                     "search_again": options.get("search_again", True) and not candidate})
         # Back to a pose found before, or to one the search before listed beside its best (a tie two
         # searches settle either way).
         again = best is not None and any(_same_pose(result.matrix, U, surface)

@@ -132,6 +132,16 @@ def iter_bunny_cases(folder: Path, seed: int = 0, scans=BUNNY_SCANS):
             yield Case(f"{stem} {kind}", f"bunny {kind}", variants.pop(kind), model, truth, exact=False)
 
 
+def match_case_groups(bunny: Path | None, seed: int = 0, quick: bool = False):
+    """Every case of the match table, in groups that share one model: the bunny cases (when its data
+    folder ``bunny`` is given), the simulated car and figurine, the depth camera's parts.  Each group's
+    cases are made when asked for, so a caller holds one capture at a time."""
+    if bunny is not None:
+        yield iter_bunny_cases(bunny, seed, scans=BUNNY_SCANS[:2] if quick else BUNNY_SCANS)
+    yield from iter_simulated_groups(seed, quick=quick)
+    yield from iter_depth_camera_groups(seed, quick=quick)
+
+
 # --- Simulated scans (exact truth) -------------------------------------------------------------
 
 # A simulated region case needs this many workpiece points; a view that sees fewer is turned.
