@@ -141,28 +141,28 @@ def write_match_files(folder: Path, groups, one_per_family: bool = False):
 
 def match_runs(folder: Path, bunny: Path | None, seed: int, quick: bool, log) -> tuple[list, list]:
     """Every case of the match table (quick: one a family) matched as a whole process by each method, a
-    model's cases at a time: WorkCal cold on the clean bunny scans (an empty cache), and warm on every
-    case (the model's cache filled before: by the cold run on a clean bunny scan, which its degradations
-    follow; elsewhere by a first, untimed run matching the model's own points, so no case finds the
-    cache filled by its own scan); (runs, peers used)."""
+    model's cases at a time: WorkCal cold on the clean bunny scans (an empty cache of its own), and warm
+    on every case (the model's cache, filled first by an untimed run matching the model's own points, so
+    no case finds it filled by its own scan first, then by what each run adds to it, as scan after scan
+    against one model does); (runs, peers used)."""
     peers = peers_available()
     best: dict = {}
     result = folder / "result.json"
     for files in write_match_files(folder, match_case_groups(bunny, seed, quick), one_per_family=quick):
         model = files[0].model
-        cache = folder / f"cache-{model.stem}"
+        cache, empty = folder / f"cache-{model.stem}", folder / "cache-cold"
         for r in range(1 if quick else ROUNDS):
             for case in files:
                 log(f"whole processes: match {case.name}, round {r + 1}")
                 ours = [PYTHON, "-m", "workcal_wb", "match", str(case.scan), str(model), "--units", "mm",
-                        "--tolerance", str(case.tolerance_mm), "--json", str(result), "--cache", str(cache)]
-                runs = {COLD: ours} if case.family == BUNNY_CLEAN else {}
-                runs[WARM] = ours
+                        "--tolerance", str(case.tolerance_mm), "--json", str(result), "--cache"]
+                runs = {COLD: ours + [str(empty)]} if case.family == BUNNY_CLEAN else {}
+                runs[WARM] = ours + [str(cache)]
                 runs.update({peer: [PYTHON, "-m", "workcal_wb.core.benchmark.peers", PEER_NAMES[peer],
                                     str(case.scan), str(model), str(result)] for peer in peers})
                 for method, argv in runs.items():
                     if method == COLD:
-                        shutil.rmtree(cache, ignore_errors=True)
+                        shutil.rmtree(empty, ignore_errors=True)
                     elif method == WARM and not cache.is_dir():
                         timed([PYTHON, "-m", "workcal_wb", "match", str(model), str(model), "--units", "mm",
                                "--tolerance", str(case.tolerance_mm), "--json", str(result), "--cache", str(cache)])
@@ -176,7 +176,8 @@ def match_runs(folder: Path, bunny: Path | None, seed: int, quick: bool, log) ->
         for case in files:
             case.scan.unlink()
         model.unlink()
-        shutil.rmtree(cache, ignore_errors=True)
+        for folder_used in (cache, empty):
+            shutil.rmtree(folder_used, ignore_errors=True)
     return list(best.values()), peers
 
 
@@ -269,9 +270,9 @@ def table(runs: list, peers: list, note: str | None, load: tuple = ()) -> tuple[
              "Each figure is a whole process measured from outside: interpreter start, imports "
              "(the package compiled to bytecode first, as installed), "
              "reading both files, preparing the model (cold: an empty model cache, measured on the clean bunny "
-             "scans; the peers always) or loading it (warm: the model's cache filled before, by the cold run on "
-             "a clean bunny scan, which its degradations follow, elsewhere by an untimed run matching the model's "
-             "own points, so that no case finds the cache filled by its own scan), the match and writing the "
+             "scans; the peers always) or loading it (warm: the model's cache, filled first by an untimed run "
+             "matching the model's own points, so that no case finds it filled by its own scan first, then by what "
+             "each run adds to it, as scan after scan against one model does), the match and writing the "
              "result JSON (when the verdict weighs a rival by the points it leaves far off, or a fit is taken to "
              "the exact surface, a mesh model's exact distances go through open3d's BVH, whose import takes "
              "0.2-0.4 s and ~45 MB, as in the peers). "
