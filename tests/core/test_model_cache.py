@@ -81,6 +81,24 @@ def test_a_hit_is_the_same_model_and_gives_a_bit_identical_match(files, tmp_path
 
 
 @pytest.mark.slow
+def test_a_loaded_model_is_written_again_when_its_run_filled_a_few_percent_more_cells():
+    """Cells a run fills beside the many a cache holds (another view of the part) are written back, or
+    every later run of that view fills them again; a handful are not worth the file."""
+    from types import SimpleNamespace
+
+    from workcal_wb.core.model_cache import _grew, _held
+
+    grid = SimpleNamespace(known=lambda: 333_000)
+    model = SimpleNamespace(_features={1.0: None}, _occupied={}, _grids={0: grid}, _custom_grids={})
+    held = _held(model)
+    grid.known = lambda: 333_000 + 28_000  # a clean bunny scan's run beside the cells of 50 others
+    assert _grew(model, held)
+    grid.known = lambda: 333_000 + 4_000
+    assert not _grew(model, held)
+    model._features[2.0] = None  # features at a voxel not held before
+    assert _grew(model, held)
+
+
 def test_a_changed_model_file_unit_or_option_misses(files, tmp_path):
     folder, _ = files
     ModelCache(tmp_path).model_file(folder / "car.ply")

@@ -43,8 +43,9 @@ ALIGN = 64
 # Only these dtypes are ever written or read (little-endian numbers and booleans).
 DTYPES = ("<f8", "<f4", "<i8", "<i4", "|b1")
 # A model loaded from the cache is written again when its run added features, or grid cells
-# numbering at least this many and this fraction of those stored.
-GROWTH_CELLS, GROWTH_FRACTION = 5000, 0.2
+# numbering at least this many and this fraction of those stored: filling them again costs every
+# later run of that view far more than writing the file once (docs/tuning.md).
+GROWTH_CELLS, GROWTH_FRACTION = 5000, 0.02
 # Modules (or packages) whose source shapes a prepared model (for a model file, also how it is read):
 # their bytes go into every key, so changed code never meets a model prepared by the old one.
 SHAPING_MODULES = ("surface", "symmetry", "robust", "pointops", "features", "global_search", "geometry")
