@@ -40,6 +40,9 @@ MAGIC = b"WorkCal prepared model\n"
 SUFFIX = ".model"
 DEFAULT_MAX_BYTES = 2 << 30
 ALIGN = 64
+# The checksums read a file this many bytes at a time (not through its mapping, whose every page read
+# would stay resident in the process).
+CHECK_CHUNK = 1 << 20
 # Only these dtypes are ever written or read (little-endian numbers and booleans).
 DTYPES = ("<f8", "<f4", "<i8", "<i4", "|b1")
 # A model loaded from the cache is written again when its run added features, or grid cells
@@ -297,7 +300,9 @@ def write_entry(path: Path, key: str, meta: dict, arrays: dict) -> None:
 
 def read_entry(path: Path, key: str) -> tuple[dict, dict]:
     """(meta, arrays) of a cache file written for ``key``; ValueError when it is not such a file
-    whole and unchanged (wrong magic, format or key, a size or checksum that does not agree)."""
+    whole and unchanged (wrong magic, format or key, a size or checksum that does not agree).  The
+    arrays are mapped from the file, each page read when used; the checksums read the file through a
+    small buffer, so the cells a run never visits do not count in its memory."""
     with open(path, "rb") as fh:
         size = os.fstat(fh.fileno()).st_size
         lead = fh.read(len(MAGIC) + 8)
@@ -310,24 +315,36 @@ def read_entry(path: Path, key: str) -> tuple[dict, dict]:
         if not isinstance(header, dict) or header.get("format") != FORMAT_VERSION or header.get("key") != key:
             raise ValueError("another format or another model")
         memory = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_COPY)
-    start = -(-(len(MAGIC) + 8 + length) // ALIGN) * ALIGN
-    arrays = {}
-    for entry in header["arrays"]:
-        dtype, shape, at, nbytes = entry["dtype"], tuple(entry["shape"]), start + entry["offset"], entry["bytes"]
-        if dtype not in DTYPES or any(not isinstance(n, int) or n < 0 for n in shape):
-            raise ValueError(f"{entry['name']}: unexpected dtype or shape")
-        count = int(np.prod(shape))
-        if count * np.dtype(dtype).itemsize != nbytes or (nbytes and at + nbytes > size):
-            raise ValueError(f"{entry['name']}: truncated")
-        if not nbytes:
-            arrays[entry["name"]] = np.empty(shape, dtype)
-            continue
-        if zlib.crc32(memoryview(memory)[at:at + nbytes]) != entry["crc32"]:
-            raise ValueError(f"{entry['name']}: checksum")
-        arrays[entry["name"]] = np.frombuffer(memory, dtype, count, at).reshape(shape)
+        start = -(-(len(MAGIC) + 8 + length) // ALIGN) * ALIGN
+        arrays, buffer = {}, memoryview(bytearray(CHECK_CHUNK))
+        for entry in header["arrays"]:
+            dtype, shape, at, nbytes = entry["dtype"], tuple(entry["shape"]), start + entry["offset"], entry["bytes"]
+            if dtype not in DTYPES or any(not isinstance(n, int) or n < 0 for n in shape):
+                raise ValueError(f"{entry['name']}: unexpected dtype or shape")
+            count = int(np.prod(shape))
+            if count * np.dtype(dtype).itemsize != nbytes or (nbytes and at + nbytes > size):
+                raise ValueError(f"{entry['name']}: truncated")
+            if not nbytes:
+                arrays[entry["name"]] = np.empty(shape, dtype)
+                continue
+            if _checksum(fh, at, nbytes, buffer) != entry["crc32"]:
+                raise ValueError(f"{entry['name']}: checksum")
+            arrays[entry["name"]] = np.frombuffer(memory, dtype, count, at).reshape(shape)
     if not isinstance(header.get("meta"), dict):
         raise ValueError("no model description")
     return header["meta"], arrays
+
+
+def _checksum(fh, at: int, nbytes: int, buffer: memoryview) -> int:
+    """CRC-32 of ``nbytes`` of the file from ``at``, read through ``buffer``."""
+    fh.seek(at)
+    crc = 0
+    while nbytes:
+        got = fh.readinto(buffer[:min(nbytes, len(buffer))])
+        if not got:
+            raise ValueError("truncated")
+        crc, nbytes = zlib.crc32(buffer[:got], crc), nbytes - got
+    return crc
 
 
 def describe(cache: ModelCache) -> str:
