@@ -11,10 +11,10 @@ turns, always tried) by what the sensor should have seen from each (visibility.p
 the model's visible surface count for a pose, scan points it would hide and model surface missing
 from the scan count against it.  When the verdict's best does not fit the scan within its limit,
 the search runs once more with more hypotheses (only such scans pay for it; not where
-MatchOptions.search_again is off, as for a calibration's clusters that may hold another object).  A pose is "ok" only
-when it explains the scan to within the scan's own noise, which must not exceed the tolerance,
-covers a real part of the model, leaves no large share of the view contradicted, pins every
-motion, and no rival is within the statistical noise of its evidence (given the number of view
+MatchOptions.search_again is off, as for a calibration's clusters that may hold another object).
+A pose is "ok" only when it explains the scan to within the scan's own noise, which must not
+exceed the tolerance, covers a real part of the model, leaves no large share of the view
+contradicted, pins every motion, and no rival is within the statistical noise of its evidence (given the number of view
 cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
 The verdict's best has its near-symmetric turns tried again, each refined exactly like it, and so are
 the search's turned rivals near it by the view (Judge._with_turns): one of them is the right pose when

@@ -98,9 +98,9 @@ def lengths(vectors: np.ndarray) -> np.ndarray:
 
 
 def median(values: np.ndarray) -> float:
-    """np.median of a 1-D array of finite numbers, to the bit (the same middle values, the same mean of
-    two), without its general machinery: a refinement step asks for one and np.median's overhead was
-    several times the partition's on a few thousand residuals."""
+    """np.median of a non-empty 1-D array of finite numbers, to the bit (the same middle values, the same
+    mean of two), without its general machinery: every refinement step asks for one, and on a few
+    thousand residuals np.median's overhead is several times the partition's."""
     half = len(values) // 2
     if len(values) % 2:
         return float(np.partition(values, half)[half])
