@@ -14,8 +14,8 @@ the search runs once more with more hypotheses (only such scans pay for it; not 
 MatchOptions.search_again is off, as for a calibration's clusters that may hold another object).
 A pose is "ok" only when it explains the scan to within the scan's own noise, which must not
 exceed the tolerance, covers a real part of the model, leaves no large share of the view
-contradicted, pins every motion, and no rival is within the statistical noise of its evidence (given the number of view
-cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
+contradicted, pins every motion, and no rival is within the statistical noise of its evidence
+(given the number of view cells and the measured noise) or better by the scan points it leaves far off the part (far_off_test).
 The verdict's best has its near-symmetric turns tried again, each refined exactly like it, and so are
 the search's turned rivals near it by the view (Judge._with_turns): one of them is the right pose when
 the search handed over a flip, and only such a pose, as converged as the best and with both fitting

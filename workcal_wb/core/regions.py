@@ -51,7 +51,7 @@ class PlatformSettings:
     sample_points: int = 5000
     chunk: int = 100  # sample points weighed against every plane at once (1.6 MB: within a core's L2 cache)
     # Points weighed against the platform's outline at once: 65,536 x its edges x 8 bytes, a few MB
-    # (the whole table of a 5M-point scan's points off the plane is hundreds).
+    # (the whole table of a 5M-point scan's points off the plane is hundreds of MB).
     hull_chunk: int = 1 << 16
     # Points this close to the platform plane (mm, plus a few scan spacings) are platform.
     band_mm: float = 1.0
@@ -360,10 +360,10 @@ def match_trusted(cloud: Cloud, surface: SurfaceModel, options: dict, role: str,
         possible = result.matrix is not None and (stands is None or stands(result.matrix))
         return result.status != FAILED, possible, result.fitness
 
-    best = None
+    best, search_again = None, options.get("search_again", True) and not candidate
     for attempt in range(attempts):
-        result = match(cloud, surface, stop=stop, **{**options, "seed": options.get("seed", 0) + attempt,
-                                                     "search_again": options.get("search_again", True) and not candidate})
+        result = match(cloud, surface, stop=stop,
+                       **{**options, "seed": options.get("seed", 0) + attempt, "search_again": search_again})
         # Back to a pose found before, or to one the search before listed beside its best (a tie two
         # searches settle either way).
         again = best is not None and any(_same_pose(result.matrix, U, surface)
