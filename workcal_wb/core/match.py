@@ -44,7 +44,7 @@ from .refine import coarse_to_fine, refine, refine_exact
 from .result import (AMBIGUOUS, BEHIND_SURFACE, FACE_CONTINUED, FAILED, FEW_POINTS, LOW_COVERAGE, MISFIT, NO_POSE,
                      NOISE_ABOVE_TOLERANCE, NOT_A_SURFACE, OK, OTHER_SIDE, OUTLINE_CONTINUED, RIVAL, RMS, SCAN_NOT_SOLID,
                      SYMMETRIC, THIN_WALL, THROUGH_SUPPORT, UNDER_CONSTRAINED, VIEW_CONTRADICTED, WITHIN_TOLERANCE,
-                     Candidate, MatchResult, Reason)
+                     Candidate, MatchResult, Reason, codes)
 from .robust import MAD_TO_SIGMA
 from .stability import gelfand, stability
 from .surface import SurfaceModel
@@ -212,6 +212,19 @@ class RivalSettings:
     quick_turn_points: int = 300
     turn_floor: float = 0.85
     turn_sigmas: float = 3.0
+    # A pose in doubt has itself, its rivals and their turns moved, each by the shift (on a grid of
+    # shift_voxels coarse voxels a step, at most shift_steps each way, out to shift_reach of the diagonal)
+    # that most pairs of shift_points scan points and shift_samples model samples vote for, and the
+    # shifts_refined with most votes refined: a part seen in part maps onto itself about another axis than
+    # the whole model, and its turn lands too far from home to slide there.  One that explains shift_gain
+    # times as much of the scan as the best is judged with it.
+    shift_points: int = 50
+    shift_samples: int = 1500
+    shift_voxels: float = 2.0
+    shift_steps: int = 5
+    shift_reach: float = 0.25
+    shift_gain: float = 1.1
+    shifts_refined: int = 3
     # A rival of the search turned more than this (deg) from the best is refined to convergence like the
     # best's turns when it comes near it by the view (Judge._refine_rivals); one turned less is the best
     # laid through its wall, or slid, and stays as found.
@@ -444,6 +457,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
+    weighed = rivals  # the poses weighed beside the verdict's best (RefineStates)
     if (init is None and options.search_again and not chosen.sigma <= fit_limit
             and judge.scan_noise <= options.tolerance_mm):
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
@@ -461,12 +475,26 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                 first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
         if again and second > first:
             with timer("verdict"):
-                judge, chosen, ranking = judged(retried, [chosen] + rivals + retried_rivals)
-    result["warnings"] += judge.warnings
+                weighed = [chosen] + rivals + retried_rivals
+                judge, chosen, ranking = judged(retried, weighed)
     if pose_only:
         return frames.invert(chosen.T)
+    warnings = result.pop("warnings")
     with timer("verdict"):
-        return _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel, result, timer)
+        verdict = _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel,
+                           {**result, "warnings": warnings + judge.warnings}, timer)
+    # A pose in doubt for more than the model's symmetry may be a turn of the part seen (_shifted_turn).
+    if (verdict.status == AMBIGUOUS and init is None and options.method == "robust"
+            and judge.scan_noise <= options.tolerance_mm and set(codes(verdict.reasons)) != {SYMMETRIC}):
+        with timer("turns shifted"):
+            shifted = _shifted_turn(chosen, weighed, medium, surface, voxel, fit_limit)
+        if shifted is not None:
+            with timer("verdict"):
+                shifted = refine_given(shifted, medium, fine, surface, options.tolerance_mm, hopeless)
+                judge, chosen, ranking = judged(shifted, [chosen] + weighed)
+                verdict = _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel,
+                                   {**result, "warnings": warnings + judge.warnings}, timer)
+    return verdict
 
 
 def prepare(surface: SurfaceModel) -> SurfaceModel:
@@ -634,6 +662,53 @@ def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceMo
     if _moved(wide.T, best.T, medium.mean(axis=0), best.gate):
         return _polish(wide, fine, surface, tolerance, hopeless)
     return best
+
+
+def _shifted_turn(best, others: list, medium: np.ndarray, surface: SurfaceModel, voxel: float, fit_limit: float):
+    """The best, one of the ``others`` weighed beside it, or a turn (_turns) of one of them that, moved
+    by the shift that lays most scan points on the model (_best_shift) and refined, explains
+    RIVALS.shift_gain times as many of the ``medium`` points within ``fit_limit`` as the best, or None
+    (the RIVALS.shifts_refined with most votes are refined; none when the best explains so many that no
+    pose could).  A part seen in part (an
+    L-block on two faces) maps onto itself about another axis than the whole model does: its turn lands
+    a few centimetres from home, where the refinement settles on a face slid along another (a fit as
+    tight as the right one, explaining less of the scan), and a search can hand over such a slid pose
+    itself."""
+    explained = inlier_scores(medium, surface, [best.T], fit_limit)[0]
+    if RIVALS.shift_gain * explained > len(medium):  # no pose can explain that many more of the points
+        return None
+    reach = RIVALS.shift_reach * surface.diagonal
+    step = max(RIVALS.shift_voxels * voxel, reach / RIVALS.shift_steps)
+    centre = medium.mean(axis=0)
+    turned = np.concatenate([np.concatenate([pose.T[None], _turns(pose, medium, surface, pose.sigma <= fit_limit)])
+                             for pose in [best, *others]])
+    turned = turned[global_search.distinct(turned, np.zeros(len(turned)), centre, RIVALS.turns_apart[0],
+                                           RIVALS.turns_apart[1] * surface.diagonal)]
+    samples = surface.points[np.linspace(0, len(surface.points) - 1, min(RIVALS.shift_samples, len(surface.points)),
+                                         dtype=np.int64)]
+    shifted = [_best_shift(T, medium[:RIVALS.shift_points], samples, reach, step) for T in turned]
+    if not shifted:
+        return None
+    states = [coarse_to_fine([medium[:RIVALS.turn_points], medium], surface, shifted[i][0], step, surface.spacing)
+              for i in np.argsort([-landed for _, landed in shifted], kind="stable")[:RIVALS.shifts_refined]]
+    scores = inlier_scores(medium, surface, [state.T for state in states], fit_limit)
+    top = int(np.argmax(scores))
+    return states[top] if scores[top] >= RIVALS.shift_gain * explained else None
+
+
+def _best_shift(T: np.ndarray, points: np.ndarray, samples: np.ndarray, reach: float, step: float):
+    """(``T`` (scan -> model) moved by the translation, on a grid of ``step`` within ``reach`` each way,
+    that most pairs of ``points`` and model ``samples`` vote for (the shift that takes the point onto the
+    sample, rounded to the grid); its votes).  A shift that lays the points on the surface collects the
+    samples around each of them."""
+    steps = int(round(reach / step))
+    side = 2 * steps + 1
+    cells = np.rint((samples[None] - frames.apply(T, points)[:, None]) / step).astype(np.int32).reshape(-1, 3) + steps
+    cells = cells[((cells >= 0) & (cells < side)).all(axis=1)]
+    votes = np.bincount((cells[:, 0] * side + cells[:, 1]) * side + cells[:, 2], minlength=side**3)
+    best = int(np.argmax(votes))
+    shift = (np.array(np.unravel_index(best, (side,) * 3)) - steps) * step
+    return frames.rigid(translation=shift) @ T, int(votes[best])
 
 
 def _near_symmetric_turns(best, medium: np.ndarray, surface: SurfaceModel, gate: float, fit_limit: float) -> list:

@@ -28,6 +28,9 @@ ROUNDS = 3
 COLD, WARM = "cold", "warm"
 # Targets: the 5M scan matched warm within this time, every run of either scan within this memory.
 TARGET_5M_S, TARGET_MB = 5.0, 1500.0
+# Random draws of the 5M scan's points, (points, draws), each calibrated as a scan of a sensor of that
+# resolution: which points a scan holds must not decide whether an object is found (a search's luck).
+DRAWS = ((1_000_000, 3), (2_000_000, 3), (3_000_000, 3))
 
 
 def scan_files(seed: int, names, log) -> tuple[Path, dict]:
@@ -110,34 +113,66 @@ def measure(seed: int, quick: bool, log) -> list:
                     "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed,
                     "peak_mb": peak, "thinned": [w for w in outcome["warnings"] if "thinned while reading" in w]})
         if "5M" in scans:
-            _calibrate_rounds(rows, scans["5M"][0], model, model_points, seed, cache, log, r)
+            _calibrate_rounds(rows, scans["5M"][0], model, model_points, seed, cache, log, r, draws=not quick)
     shutil.rmtree(cache, ignore_errors=True)
     return list(rows.values())
 
 
 def _calibrate_rounds(rows: dict, scan: Path, model: Path, model_points: np.ndarray, seed: int, cache: Path, log,
-                      round_index: int) -> None:
-    """The 5M scan's whole scene calibrated (automatic regions, no hints), cold and warm, into ``rows``."""
+                      round_index: int, draws: bool = True) -> None:
+    """The 5M scan's whole scene calibrated (automatic regions, no hints), cold and warm, into ``rows``;
+    in the first round, with ``draws``, each of its random draws (draw_files) too, warm."""
+    shutil.rmtree(cache, ignore_errors=True)
+    for run in (COLD, WARM):
+        log(f"large scans: calibrate 5M {run}, round {round_index + 1}")
+        _keep(rows, ("5M calibrate", run), _calibrated(scan, "5M", run, model, model_points, seed, cache))
+    if draws and round_index == 0:
+        for label, path in draw_files(scan, seed, log):
+            log(f"large scans: calibrate {label}")
+            rows[(label, WARM)] = _calibrated(path, label, WARM, model, model_points, seed, cache)
+
+
+def _calibrated(scan: Path, label: str, run: str, model: Path, model_points: np.ndarray, seed: int,
+                cache: Path) -> dict:
+    """The row of ``scan``'s whole scene calibrated as a whole process with the model ``cache``."""
     from .processes import PYTHON, timed
 
     reference, W = reference_file(seed)
     out = FOLDER / "calibrate-out"
-    shutil.rmtree(cache, ignore_errors=True)
-    for run in (COLD, WARM):
-        log(f"large scans: calibrate 5M {run}, round {round_index + 1}")
-        shutil.rmtree(out, ignore_errors=True)
-        elapsed, peak, _ = timed([PYTHON, "-m", "workcal_wb", "calibrate", "--scan", str(scan), "--workpiece",
-                                  str(model), "--reference", str(reference), "--seed", str(seed), "--cache",
-                                  str(cache), "--out", str(out)])
-        outcome = json.loads((out / "result.json").read_text())
-        found = outcome["W"]
-        rotation, displacement = pose_errors(None if found is None else np.array(found), W, model_points)
-        _keep(rows, ("5M calibrate", run), {
-            "scan": "5M", "command": "calibrate", "run": run, **_file_facts(scan),
+    shutil.rmtree(out, ignore_errors=True)
+    elapsed, peak, _ = timed([PYTHON, "-m", "workcal_wb", "calibrate", "--scan", str(scan), "--workpiece",
+                              str(model), "--reference", str(reference), "--seed", str(seed), "--cache",
+                              str(cache), "--out", str(out)])
+    outcome = json.loads((out / "result.json").read_text())
+    shutil.rmtree(out, ignore_errors=True)
+    found = outcome["W"]
+    rotation, displacement = pose_errors(None if found is None else np.array(found), W, model_points)
+    return {"scan": label, "command": "calibrate", "run": run, **_file_facts(scan),
             "used_points": outcome["inputs"]["scan_points"], "status": outcome["status"],
             "rotation_error_deg": rotation, "displacement_mm": displacement, "time_s": elapsed, "peak_mb": peak,
-            "thinned": []})
-    shutil.rmtree(out, ignore_errors=True)
+            "thinned": []}
+
+
+def draw_files(scan: Path, seed: int, log) -> list[tuple[str, Path]]:
+    """(label, file) of each random draw of ``scan``'s points (DRAWS: as a sensor of that resolution would
+    scan the scene), each written once into build/bench-large."""
+    from ..geometry import Cloud
+    from ..readers import read_cloud
+    from ..writers import write_ply
+
+    files, points = [], None
+    for size, draws in DRAWS:
+        for k in range(draws):
+            path = FOLDER / f"{scan.stem}-draw-{size}-{k}.ply"
+            if not path.exists():
+                log(f"large scans: writing a random {size:,} of {scan.name}'s points into {FOLDER} (once) ...")
+                points = read_cloud(scan).points if points is None else points
+                chosen = np.sort(np.random.default_rng([seed, size, k]).choice(len(points), size, replace=False))
+                partial = path.with_suffix(".part")  # renamed when whole: an interrupted run leaves none to reuse
+                write_ply(partial, Cloud(points[chosen]))
+                partial.replace(path)
+            files.append((f"5M drawn to {size / 1e6:g}M #{k + 1}", path))
+    return files
 
 
 def _keep(rows: dict, key: tuple, row: dict) -> None:
@@ -195,7 +230,12 @@ def table(rows: list, load: tuple, rounds: int = ROUNDS) -> tuple[str, list]:
              "than 6 million points is thinned while it is read, in chunks of 1M records, one real point per voxel "
              "(never the whole file in memory), and says so on stdout and in result.json's warnings"
              + (f", e.g. \"{thinned.split(': ', 1)[1]}\"" if thinned else "") + ". "
-             f"Times: the fastest of {rounds} round(s), as other jobs share the machine; memory: the largest.", ""]
+             f"Times: the fastest of {rounds} round(s), as other jobs share the machine; memory: the largest."
+             + (" The 5M rows drawn to fewer points: random draws of its points ("
+                + ", ".join(f"{draws} of {size / 1e6:g}M" for size, draws in DRAWS)
+                + "), as a sensor of that resolution scans the scene, each calibrated once, warm: which points a "
+                "scan holds must not decide whether an object is found."
+                if any(" drawn to " in row["scan"] for row in rows) else ""), ""]
     if load:
         lines += [f"Load average (1 min) on the {multiprocessing.cpu_count()} cores, shared with other jobs: "
                   + " at the start, ".join(f"{x:.1f}" for x in load) + " at the end.", ""]
