@@ -93,17 +93,18 @@ def test_large_scan_table_flags_missed_targets():
                           row(drawn, "warm", 9.0, 700, "ambiguous", command="calibrate")], ())
     assert missed == [f"large scans: calibrate {drawn} warm: ambiguous, 0.0010 deg, 0.010 mm from the truth"]
     assert "random draws of its points (3 of 1M, 3 of 2M, 3 of 3M)" in text
+    assert "random draws" not in table([row("5M", "warm", 3.9, 700)], ())[0]
 
 
 def test_the_large_scans_draws_are_random_points_of_the_scan_written_once(tmp_path, monkeypatch):
-    from workcal_wb.core.benchmark import large
+    from workcal_wb.core.benchmark import cases, large
     from workcal_wb.core.geometry import Cloud
     from workcal_wb.core.readers import read_cloud
     from workcal_wb.core.writers import write_ply
 
     monkeypatch.setattr(large, "FOLDER", tmp_path)
     monkeypatch.setattr(large, "DRAWS", ((300, 2), (600, 1)))
-    points = np.random.default_rng(0).uniform(0, 100, (1000, 3))
+    points = np.random.default_rng(0).uniform(0, 100, (1000, 3)).astype(np.float32).astype(float)
     scan = tmp_path / "scan.ply"
     write_ply(scan, Cloud(points))
     files = large.draw_files(scan, 0, lambda message: None)
@@ -111,16 +112,17 @@ def test_the_large_scans_draws_are_random_points_of_the_scan_written_once(tmp_pa
                                              "5M drawn to 0.0006M #1"]
     drawn = [read_cloud(path).points for _, path in files]
     assert [len(p) for p in drawn] == [300, 300, 600]
-    for p in drawn:  # points of the scan, each once
-        rows = {tuple(x) for x in np.round(points, 4)}
-        assert all(tuple(x) in rows for x in np.round(p, 4)) and len(np.unique(p, axis=0)) == len(p)
+    scanned = {tuple(x) for x in points}
+    for path, p in zip((path for _, path in files), drawn):  # points of the scan, each once, as float32
+        assert all(tuple(x) in scanned for x in p) and len(np.unique(p, axis=0)) == len(p)
+        assert b"property float x" in path.read_bytes()[:400]
     assert not np.array_equal(drawn[0], drawn[1])
-    written = [path.stat().st_mtime_ns for _, path in files]
-    assert [path.stat().st_mtime_ns for _, path in large.draw_files(scan, 0, lambda message: None)] == written
+    written = []
+    monkeypatch.setattr(cases, "write_float32_ply", lambda *args: written.append(args))
+    assert large.draw_files(scan, 0, lambda message: None) == files and not written  # reused
     assert not list(tmp_path.glob("*.part"))
 
 
-@pytest.fixture(scope="module")
 def dragon_set():
     """The verdicts table's dragon cases (seed 0), made once for the tests that use them."""
     from workcal_wb.core.benchmark.verdicts import dragon_cases

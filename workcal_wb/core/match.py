@@ -457,7 +457,7 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     with timer("verdict"):
         judge, chosen, ranking = judged(best, rivals)
-    weighed = rivals  # the poses weighed beside the verdict's best (RefineStates)
+    weighed = [best] + rivals  # the poses handed to the verdict (RefineStates; its best may be another)
     if (init is None and options.search_again and not chosen.sigma <= fit_limit
             and judge.scan_noise <= options.tolerance_mm):
         # The verdict's best does not fit the scan: the feature votes missed the pose (a scan that
@@ -475,25 +475,30 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
                 first, second = inlier_scores(medium, surface, [chosen.T, retried.T], fit_limit)
         if again and second > first:
             with timer("verdict"):
-                weighed = [chosen] + rivals + retried_rivals
-                judge, chosen, ranking = judged(retried, weighed)
+                weighed += [chosen, retried] + retried_rivals
+                judge, chosen, ranking = judged(retried, [chosen] + rivals + retried_rivals)
     if pose_only:
         return frames.invert(chosen.T)
     warnings = result.pop("warnings")
-    with timer("verdict"):
-        verdict = _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel,
-                           {**result, "warnings": warnings + judge.warnings}, timer)
-    # A pose in doubt for more than the model's symmetry may be a turn of the part seen (_shifted_turn).
+
+    def verdict_of(judge, chosen, ranking):  # each verdict appends to a list of its own
+        with timer("verdict"):
+            return _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel,
+                            {**result, "warnings": warnings + judge.warnings}, timer)
+
+    verdict = verdict_of(judge, chosen, ranking)
+    # A pose in doubt for more than the model's symmetry may be a turn of the part seen (_shifted_turn):
+    # judged again with every pose weighed before, its verdict stands unless it fails.
     if (verdict.status == AMBIGUOUS and init is None and options.method == "robust"
-            and judge.scan_noise <= options.tolerance_mm and set(codes(verdict.reasons)) != {SYMMETRIC}):
+            and set(codes(verdict.reasons)) != {SYMMETRIC}):
         with timer("turns shifted"):
             shifted = _shifted_turn(chosen, weighed, medium, surface, voxel, fit_limit)
         if shifted is not None:
             with timer("verdict"):
                 shifted = refine_given(shifted, medium, fine, surface, options.tolerance_mm, hopeless)
-                judge, chosen, ranking = judged(shifted, [chosen] + weighed)
-                verdict = _verdict(scan, sample, surface, chosen, ranking, judge, options, voxel,
-                                   {**result, "warnings": warnings + judge.warnings}, timer)
+                again = verdict_of(*judged(shifted, [chosen] + weighed))
+            verdict = again if again.status != FAILED else verdict
+    verdict.time_s = timer.total()
     return verdict
 
 
@@ -666,34 +671,32 @@ def refine_given(state, medium: np.ndarray, fine: np.ndarray, surface: SurfaceMo
 
 def _shifted_turn(best, others: list, medium: np.ndarray, surface: SurfaceModel, voxel: float, fit_limit: float):
     """The best, one of the ``others`` weighed beside it, or a turn (_turns) of one of them that, moved
-    by the shift that lays most scan points on the model (_best_shift) and refined, explains
-    RIVALS.shift_gain times as many of the ``medium`` points within ``fit_limit`` as the best, or None
-    (the RIVALS.shifts_refined with most votes are refined; none when the best explains so many that no
-    pose could).  A part seen in part (an
-    L-block on two faces) maps onto itself about another axis than the whole model does: its turn lands
-    a few centimetres from home, where the refinement settles on a face slid along another (a fit as
-    tight as the right one, explaining less of the scan), and a search can hand over such a slid pose
-    itself."""
+    by the shift their points and the model's samples vote for (_best_shift) and refined, explains
+    RIVALS.shift_gain times as many of the ``medium`` points within ``fit_limit`` as the best, or None.
+    The RIVALS.shifts_refined distinct ones with most votes are refined; none is tried when the best
+    explains so many points that no pose could explain that many more.  A part seen in part (an L-block
+    on two faces) maps onto itself about another axis than the whole model does: its turn lands a few
+    centimetres from home, where the refinement settles on a face slid along another (a fit as tight as
+    the right one, explaining less of the scan), and a search can hand over such a slid pose itself."""
     explained = inlier_scores(medium, surface, [best.T], fit_limit)[0]
-    if RIVALS.shift_gain * explained > len(medium):  # no pose can explain that many more of the points
+    if RIVALS.shift_gain * explained > len(medium):
         return None
     reach = RIVALS.shift_reach * surface.diagonal
     step = max(RIVALS.shift_voxels * voxel, reach / RIVALS.shift_steps)
     centre = medium.mean(axis=0)
+    apart = (RIVALS.turns_apart[0], RIVALS.turns_apart[1] * surface.diagonal)
     turned = np.concatenate([np.concatenate([pose.T[None], _turns(pose, medium, surface, pose.sigma <= fit_limit)])
                              for pose in [best, *others]])
-    turned = turned[global_search.distinct(turned, np.zeros(len(turned)), centre, RIVALS.turns_apart[0],
-                                           RIVALS.turns_apart[1] * surface.diagonal)]
-    samples = surface.points[np.linspace(0, len(surface.points) - 1, min(RIVALS.shift_samples, len(surface.points)),
-                                         dtype=np.int64)]
-    shifted = [_best_shift(T, medium[:RIVALS.shift_points], samples, reach, step) for T in turned]
-    if not shifted:
-        return None
-    states = [coarse_to_fine([medium[:RIVALS.turn_points], medium], surface, shifted[i][0], step, surface.spacing)
-              for i in np.argsort([-landed for _, landed in shifted], kind="stable")[:RIVALS.shifts_refined]]
+    turned = turned[global_search.distinct(turned, np.zeros(len(turned)), centre, *apart)]
+    # Spread over the scan: a small scan's medium points are in the file's order, scan line by scan line.
+    voters = medium[::max(1, len(medium) // RIVALS.shift_points)][:RIVALS.shift_points]
+    samples = surface.points[surface.view_order[:RIVALS.shift_samples]]
+    shifted, votes = zip(*(_best_shift(T, voters, samples, reach, step) for T in turned))
+    states = [coarse_to_fine([medium[:RIVALS.turn_points], medium], surface, shifted[i], step, surface.spacing)
+              for i in global_search.distinct(shifted, votes, centre, *apart, RIVALS.shifts_refined)]
     scores = inlier_scores(medium, surface, [state.T for state in states], fit_limit)
     top = int(np.argmax(scores))
-    return states[top] if scores[top] >= RIVALS.shift_gain * explained else None
+    return states[top] if scores[top] > 0 and scores[top] >= RIVALS.shift_gain * explained else None
 
 
 def _best_shift(T: np.ndarray, points: np.ndarray, samples: np.ndarray, reach: float, step: float):

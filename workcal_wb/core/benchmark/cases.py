@@ -270,17 +270,23 @@ def write_large_scan(path: Path, captures: int, seed: int = 0) -> np.ndarray:
         capture = scanner.scan(scene)
         parts.append(frames.apply(S_B @ capture.B_S, capture.points).astype("<f4"))
         del capture
-    count = sum(map(len, parts))
-    header = (f"ply\nformat binary_little_endian 1.0\ncomment units mm\ncomment {captures} simulated capture(s) "
-              f"of the car scene, seed {seed}\nelement vertex {count}\nproperty float x\nproperty float y\n"
+    write_float32_ply(path, parts, f"{captures} simulated capture(s) of the car scene, seed {seed}")
+    return S_B @ scene.W
+
+
+def write_float32_ply(path: Path, parts, comment: str) -> None:
+    """A binary PLY of the points in ``parts`` (arrays of x y z, mm) as float32, a sensor's format, with
+    ``comment``; written beside and renamed when whole, so an interrupted run leaves no file to reuse."""
+    parts = [np.asarray(part, dtype="<f4") for part in parts]
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment units mm\ncomment {comment}\n"
+              f"element vertex {sum(map(len, parts))}\nproperty float x\nproperty float y\n"
               "property float z\nend_header\n").encode()
-    partial = Path(f"{path}.part")  # renamed when whole: an interrupted run leaves no file to reuse
+    partial = Path(f"{path}.part")
     with open(partial, "wb") as fh:
         fh.write(header)
         for part in parts:
             fh.write(part.tobytes())
     partial.replace(path)
-    return S_B @ scene.W
 
 
 def large_model(seed: int = 0) -> Cloud:

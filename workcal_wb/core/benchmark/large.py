@@ -155,10 +155,9 @@ def _calibrated(scan: Path, label: str, run: str, model: Path, model_points: np.
 
 def draw_files(scan: Path, seed: int, log) -> list[tuple[str, Path]]:
     """(label, file) of each random draw of ``scan``'s points (DRAWS: as a sensor of that resolution would
-    scan the scene), each written once into build/bench-large."""
-    from ..geometry import Cloud
+    scan the scene), each written once into build/bench-large as float32, as the scan is."""
     from ..readers import read_cloud
-    from ..writers import write_ply
+    from .cases import write_float32_ply
 
     files, points = [], None
     for size, draws in DRAWS:
@@ -168,9 +167,7 @@ def draw_files(scan: Path, seed: int, log) -> list[tuple[str, Path]]:
                 log(f"large scans: writing a random {size:,} of {scan.name}'s points into {FOLDER} (once) ...")
                 points = read_cloud(scan).points if points is None else points
                 chosen = np.sort(np.random.default_rng([seed, size, k]).choice(len(points), size, replace=False))
-                partial = path.with_suffix(".part")  # renamed when whole: an interrupted run leaves none to reuse
-                write_ply(partial, Cloud(points[chosen]))
-                partial.replace(path)
+                write_float32_ply(path, [points[chosen]], f"a random {size} of the points of {scan.name}")
             files.append((f"5M drawn to {size / 1e6:g}M #{k + 1}", path))
     return files
 
