@@ -123,6 +123,7 @@ def test_the_large_scans_draws_are_random_points_of_the_scan_written_once(tmp_pa
     assert not list(tmp_path.glob("*.part"))
 
 
+@pytest.fixture(scope="module")
 def dragon_set():
     """The verdicts table's dragon cases (seed 0), made once for the tests that use them."""
     from workcal_wb.core.benchmark.verdicts import dragon_cases

@@ -488,9 +488,11 @@ def _match(scan: Cloud, model, init, options: MatchOptions, pose_only: bool = Fa
 
     verdict = verdict_of(judge, chosen, ranking)
     # A pose in doubt for more than the model's symmetry may be a turn of the part seen (_shifted_turn):
-    # judged again with every pose weighed before, its verdict stands unless it fails.
+    # judged again with every pose weighed before, its verdict stands unless it fails.  Not a thin part's:
+    # laid on its wall's other face, a pose explains as many points, so a count cannot tell the faces.
     if (verdict.status == AMBIGUOUS and init is None and options.method == "robust"
-            and set(codes(verdict.reasons)) != {SYMMETRIC}):
+            and set(codes(verdict.reasons)) != {SYMMETRIC}
+            and not surface.wall_across < VERDICT.thin_part * surface.diagonal):
         with timer("turns shifted"):
             shifted = _shifted_turn(chosen, weighed, medium, surface, voxel, fit_limit)
         if shifted is not None:
